@@ -1,0 +1,63 @@
+//! Definitions shared by the splatting passes. src/render/shader.rs prepends this file (and any
+//! `const` overrides such as CHANNELS) to each pass, so layouts are written once.
+//! Rust mirrors: `FrameUniform` and `GpuGaussian`/`Projected` in src/render/layout.rs.
+
+const TILE_SIZE: u32 = 16u;
+// Depth keys of culled Gaussians: above every finite positive float, so they sort last.
+const CULLED_KEY: u32 = 0xffffffffu;
+
+// Indices into the stats buffer (RenderStats in src/render/mod.rs).
+const STAT_NONFINITE: u32 = 0u;
+const STAT_NEAR: u32 = 1u;
+const STAT_TRANSPARENT: u32 = 2u;
+const STAT_DEGENERATE: u32 = 3u;
+const STAT_OUTSIDE: u32 = 4u;
+const STAT_VISIBLE: u32 = 5u;
+const STAT_PAIRS_NEEDED: u32 = 6u;
+const STAT_PAIRS: u32 = 7u;
+
+struct Frame {
+    view_from_world: mat4x4<f32>,
+    focal: vec2<f32>,
+    // Principal point in centre-at-integer pixels (cx − 0.5, cy − 0.5).
+    principal: vec2<f32>,
+    // EWA Jacobian clamp on x/z and y/z: (x_neg, x_pos, y_neg, y_pos).
+    ewa_lim: vec4<f32>,
+    size: vec2<u32>,
+    tiles: vec2<u32>,
+    near: f32,
+    num_gaussians: u32,
+    pair_capacity: u32,
+    channels: u32,
+}
+
+struct Gaussian {
+    pos: vec3<f32>,
+    opacity: f32,
+    // (w, x, y, z), not renormalised (as forward.cu:computeCov3D).
+    rot: vec4<f32>,
+    scale: vec3<f32>,
+    _pad: f32,
+}
+
+struct Projected {
+    conic_opacity: vec4<f32>,
+    xy: vec2<f32>,
+    depth: f32,
+    // Tile rectangle [min, max), x in the low 16 bits, y in the high 16.
+    rect_min: u32,
+    rect_max: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// Bit test, not `x != x`: shader compilers may assume floats are finite and fold that away.
+fn is_finite(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
+}
+
+// Dispatches larger than 65535 workgroups are split over y; this recovers the flat index.
+fn flat_id(wid: vec3<u32>, nwg: vec3<u32>, lid: u32, wg_size: u32) -> u32 {
+    return (wid.y * nwg.x + wid.x) * wg_size + lid;
+}

@@ -1,0 +1,70 @@
+//! Present: draws the splat output into the viewer's colour target with a full-screen triangle.
+//! Reads the channel layers straight from the textures the rasterizer wrote (no copy).
+//! Modes: three chosen feature channels as RGB, accumulated alpha, or inverse depth.
+
+struct Present {
+    size: vec2<u32>,
+    mode: u32,
+    srgb_target: u32,
+    rgb_channels: vec4<u32>,
+    inv_depth_range: vec2<f32>,
+    _pad: vec2<f32>,
+}
+
+const MODE_RGB: u32 = 0u;
+const MODE_ALPHA: u32 = 1u;
+const MODE_DEPTH: u32 = 2u;
+
+@group(0) @binding(0) var<uniform> params: Present;
+@group(0) @binding(1) var features: texture_2d_array<f32>;
+@group(0) @binding(2) var aux: texture_2d_array<f32>;
+
+struct VertexOut {
+    @builtin(position) position: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+}
+
+@vertex
+fn vs_main(@builtin(vertex_index) v: u32) -> VertexOut {
+    let uv = vec2<f32>(f32((v << 1u) & 2u), f32(v & 2u));
+    var out: VertexOut;
+    out.position = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0);
+    out.uv = uv;
+    return out;
+}
+
+fn to_linear(c: vec3<f32>) -> vec3<f32> {
+    let lo = c / 12.92;
+    let hi = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
+    return select(hi, lo, c <= vec3<f32>(0.04045));
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+    let p = min(vec2<u32>(in.uv * vec2<f32>(params.size)), params.size - 1u);
+    var c: vec3<f32>;
+    switch params.mode {
+        case MODE_ALPHA: {
+            c = vec3<f32>(textureLoad(aux, p, 0u, 0).x);
+        }
+        case MODE_DEPTH: {
+            let r = params.inv_depth_range;
+            let d = textureLoad(aux, p, 1u, 0).x;
+            c = vec3<f32>(clamp((d - r.x) / max(r.y - r.x, 1e-12), 0.0, 1.0));
+        }
+        default: {
+            let ch = params.rgb_channels;
+            c = vec3<f32>(
+                textureLoad(features, p, ch.x, 0).x,
+                textureLoad(features, p, ch.y, 0).x,
+                textureLoad(features, p, ch.z, 0).x,
+            );
+        }
+    }
+    // Feature values are display-referred (like the photos they come from); clamp NaN-free.
+    c = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
+    if params.srgb_target != 0u {
+        c = to_linear(c);
+    }
+    return vec4<f32>(c, 1.0);
+}

@@ -1,0 +1,150 @@
+//! Pinhole cameras in GUAVA's axes (COLMAP/OpenCV: x right, y down, z forward), as the splatting
+//! pass and the CPU reference consume them.
+//!
+//! Intrinsics use the pixel-edge convention: pixel `i` spans `[i, i+1)`, so the image centre of a
+//! `W`-wide image is `W/2`. GUAVA's camera (`invtanfov = 24`, `utils/graphics_utils.py:get_proj_matrix`)
+//! is `fx = fy = 24·W/2`, `cx = W/2`: the reference's `ndc2Pix` then puts a point at
+//! `fx·x/z + cx − 0.5` in centre-at-integer pixel coordinates, which is what the rasterizer uses.
+
+use glam::{Mat4, Vec3};
+
+/// The reference rasterizer's near cull (`auxiliary.h:in_frustum`: `p_view.z <= 0.2`).
+pub const REFERENCE_NEAR: f32 = 0.2;
+/// GUAVA's `MODEL.invtanfov`: 1/tan(fov/2) for every camera.
+pub const GUAVA_INVTANFOV: f32 = 24.0;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub view_from_world: Mat4,
+    pub width: u32,
+    pub height: u32,
+    /// Focal lengths in pixels.
+    pub fx: f32,
+    pub fy: f32,
+    /// Principal point in pixel-edge coordinates (`W/2` is the centre).
+    pub cx: f32,
+    pub cy: f32,
+    /// Gaussians whose centre has view depth `z <= near` are culled.
+    pub near: f32,
+}
+
+impl Camera {
+    /// GUAVA's camera: square `size²` image, `tan(fov/2) = 1/invtanfov`, centred principal point.
+    pub fn guava(view_from_world: Mat4, size: u32, invtanfov: f32) -> Self {
+        let focal = invtanfov * size as f32 / 2.0;
+        Self {
+            view_from_world,
+            width: size,
+            height: size,
+            fx: focal,
+            fy: focal,
+            cx: size as f32 / 2.0,
+            cy: size as f32 / 2.0,
+            near: REFERENCE_NEAR,
+        }
+    }
+
+    /// Square pixels, vertical field of view `fov_y_rad`, any aspect.
+    pub fn from_fov_y(view_from_world: Mat4, width: u32, height: u32, fov_y_rad: f32) -> Self {
+        let fy = 0.5 * height as f32 / (0.5 * fov_y_rad).tan();
+        Self {
+            view_from_world,
+            width,
+            height,
+            fx: fy,
+            fy,
+            cx: width as f32 / 2.0,
+            cy: height as f32 / 2.0,
+            near: REFERENCE_NEAR,
+        }
+    }
+
+    /// View matrix looking from `eye` at `target`, `up` pointing up on screen (camera −y).
+    pub fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
+        let forward = (target - eye).normalize();
+        let right = forward.cross(up).normalize();
+        let down = forward.cross(right);
+        // Rows of the rotation are the camera axes in world coordinates.
+        let rot = Mat4::from_cols(
+            right.extend(0.0),
+            down.extend(0.0),
+            forward.extend(0.0),
+            glam::Vec4::W,
+        )
+        .transpose();
+        rot * Mat4::from_translation(-eye)
+    }
+
+    pub fn tiles(&self) -> (u32, u32) {
+        (
+            self.width.div_ceil(crate::render::TILE_SIZE),
+            self.height.div_ceil(crate::render::TILE_SIZE),
+        )
+    }
+
+    /// The reference's EWA Jacobian clamp, `|x/z| ≤ 1.3·tan_fovx` (`forward.cu:computeCov2D`),
+    /// generalised to off-centre principal points as gsplat does; equal to it when `cx = W/2`.
+    /// Returns (x_neg, x_pos, y_neg, y_pos) as bounds on x/z and y/z.
+    pub fn ewa_limits(&self) -> [f32; 4] {
+        let tan_x = 0.5 * self.width as f32 / self.fx;
+        let tan_y = 0.5 * self.height as f32 / self.fy;
+        [
+            self.cx / self.fx + 0.3 * tan_x,
+            (self.width as f32 - self.cx) / self.fx + 0.3 * tan_x,
+            self.cy / self.fy + 0.3 * tan_y,
+            (self.height as f32 - self.cy) / self.fy + 0.3 * tan_y,
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn guava_camera_matches_reference_pixel_formula() {
+        // notes/guava-pipeline.md §2.3: x_pix = 6144·X/Z + 255.5 at 512².
+        let cam = Camera::guava(Mat4::IDENTITY, 512, GUAVA_INVTANFOV);
+        let (x, z) = (0.1_f32, 3.0_f32);
+        let x_pix = cam.fx * x / z + cam.cx - 0.5;
+        assert!((x_pix - (6144.0 * x / z + 255.5)).abs() < 1e-3);
+        let lim = cam.ewa_limits();
+        assert!(lim.iter().all(|l| (l - 1.3 / 24.0).abs() < 1e-6), "{lim:?}");
+    }
+
+    #[test]
+    fn look_at_puts_target_on_the_optical_axis() {
+        let view = Camera::look_at(Vec3::new(1.0, 2.0, 3.0), Vec3::ZERO, Vec3::Y);
+        let t = view.transform_point3(Vec3::ZERO);
+        assert!(t.x.abs() < 1e-5 && t.y.abs() < 1e-5 && t.z > 0.0, "{t}");
+        // World up is screen up, i.e. camera −y.
+        let up = view.transform_vector3(Vec3::Y);
+        assert!(up.y < 0.0, "{up}");
+    }
+}
+
+/// A view that frames `cloud` (its finite centres' bounding sphere) for a vertical field of view,
+/// orbiting its centre by `yaw` and `pitch` (radians) from the front (looking along +z, y down).
+pub fn orbit_view(
+    cloud: &crate::gaussians::GaussianCloud,
+    fov_y_rad: f32,
+    yaw: f32,
+    pitch: f32,
+) -> Option<Mat4> {
+    let (lo, hi) = cloud.bounds()?;
+    let centre = 0.5 * (lo + hi);
+    let radius = (0.5 * (hi - lo).length()).max(1e-3);
+    let distance = radius / (0.5 * fov_y_rad).sin();
+    Some(orbit(centre, distance, yaw, pitch))
+}
+
+/// Camera on a sphere around `target`; yaw about world −y (up), pitch towards it. Yaw 0, pitch 0
+/// looks along +z, the GUAVA camera's direction.
+pub fn orbit(target: Vec3, distance: f32, yaw: f32, pitch: f32) -> Mat4 {
+    let dir = Vec3::new(
+        yaw.sin() * pitch.cos(),
+        -pitch.sin(),
+        yaw.cos() * pitch.cos(),
+    );
+    Camera::look_at(target - dir * distance, target, Vec3::NEG_Y)
+}

@@ -1,0 +1,80 @@
+//! A cloud of 3D Gaussians with C feature channels: what reconstruction produces, rigging moves and
+//! the splatting pass draws. Attributes are stored activated (linear scale, opacity in [0,1]).
+
+pub mod ply;
+pub mod synthetic;
+
+/// Gaussian-major storage; `features[i * channels + c]` is channel `c` of Gaussian `i`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GaussianCloud {
+    pub channels: usize,
+    pub positions: Vec<[f32; 3]>,
+    /// Quaternions (w, x, y, z), used as given: like the reference rasterizer
+    /// (`forward.cu:computeCov3D`), the splatter does not renormalise them.
+    pub rotations: Vec<[f32; 4]>,
+    /// Standard deviations along the rotated axes (linear, not log).
+    pub scales: Vec<[f32; 3]>,
+    /// In [0, 1] (sigmoid already applied).
+    pub opacities: Vec<f32>,
+    pub features: Vec<f32>,
+}
+
+/// Fewest and most feature channels the splatting pass supports.
+pub const MIN_CHANNELS: usize = 1;
+pub const MAX_CHANNELS: usize = 64;
+
+impl GaussianCloud {
+    pub fn new(channels: usize) -> Self {
+        assert!(
+            (MIN_CHANNELS..=MAX_CHANNELS).contains(&channels),
+            "channels must be in {MIN_CHANNELS}..={MAX_CHANNELS}, got {channels}"
+        );
+        Self {
+            channels,
+            ..Default::default()
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    pub fn push(
+        &mut self,
+        position: [f32; 3],
+        rotation: [f32; 4],
+        scale: [f32; 3],
+        opacity: f32,
+        features: &[f32],
+    ) {
+        assert_eq!(
+            features.len(),
+            self.channels,
+            "feature count must equal the cloud's channels"
+        );
+        self.positions.push(position);
+        self.rotations.push(rotation);
+        self.scales.push(scale);
+        self.opacities.push(opacity);
+        self.features.extend_from_slice(features);
+    }
+
+    pub fn features_of(&self, i: usize) -> &[f32] {
+        &self.features[i * self.channels..(i + 1) * self.channels]
+    }
+
+    /// Axis-aligned bounds of the finite centres, for framing a camera; `None` if there are none.
+    pub fn bounds(&self) -> Option<(glam::Vec3, glam::Vec3)> {
+        let mut it = self
+            .positions
+            .iter()
+            .map(|p| glam::Vec3::from(*p))
+            .filter(|p| p.is_finite());
+        let first = it.next()?;
+        Some(it.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p))))
+    }
+}

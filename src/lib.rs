@@ -1,0 +1,11 @@
+//! guava-rs: GUAVA upper-body Gaussian avatars (ICCV 2025) in Rust on wgpu.
+//!
+//! Data flows one way: inputs → body → Gaussians → splat → refine → screen. This crate holds
+//! every stage, each runnable headless; the `ui` crate is the viewer window around it.
+
+pub mod bench;
+pub mod camera;
+pub mod gaussians;
+pub mod gpu;
+pub mod onnx;
+pub mod render;

@@ -1,0 +1,145 @@
+//! `guava`: the headless CLI. `guava info` reports the GPU and ONNX Runtime; `guava render` draws a
+//! splat file to PNG; `guava bench splat` times the splatting pass.
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+use guava::camera::Camera;
+use guava::gpu::GpuContext;
+use guava::render::HeadlessRenderer;
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(
+    name = "guava",
+    version,
+    about = "GUAVA Gaussian avatars: headless tools"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print the GPU adapter, its limits, and whether ONNX Runtime loads.
+    Info,
+    /// Render a 3DGS .ply file to a PNG, framed by an orbit camera.
+    Render {
+        #[arg(long)]
+        ply: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long, default_value_t = 512)]
+        width: u32,
+        #[arg(long, default_value_t = 512)]
+        height: u32,
+        /// Vertical field of view in degrees.
+        #[arg(long, default_value_t = 50.0)]
+        fov: f32,
+        /// Orbit angles in degrees around the cloud's centre.
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        yaw: f32,
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        pitch: f32,
+    },
+    /// Benchmarks (print a table).
+    Bench {
+        #[command(subcommand)]
+        which: Bench,
+    },
+}
+
+#[derive(Subcommand)]
+enum Bench {
+    /// The splatting pass: per-stage times over cloud sizes, resolutions and channel counts.
+    Splat(guava::bench::SplatBenchArgs),
+}
+
+fn main() {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    if let Err(e) = run(Cli::parse()) {
+        eprintln!("guava: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Info => info(),
+        Command::Render {
+            ply,
+            out,
+            width,
+            height,
+            fov,
+            yaw,
+            pitch,
+        } => {
+            let cloud = guava::gaussians::ply::read(&ply)?;
+            let view = guava::camera::orbit_view(
+                &cloud,
+                fov.to_radians(),
+                yaw.to_radians(),
+                pitch.to_radians(),
+            )
+            .with_context(|| format!("{}: no finite Gaussian to frame", ply.display()))?;
+            let camera = Camera::from_fov_y(view, width, height, fov.to_radians());
+            let mut renderer = HeadlessRenderer::new(GpuContext::headless()?);
+            let background = vec![0.0; cloud.channels];
+            let (image, stats) = renderer.render(&cloud, &camera, &background)?;
+            guava::render::save_png(&image.to_rgb8(), &out)?;
+            println!(
+                "{}: {} Gaussians, {} drawn, {} culled ({} tile pairs) → {} [{}]",
+                ply.display(),
+                stats.input,
+                stats.visible,
+                stats.culled(),
+                stats.tile_pairs,
+                out.display(),
+                renderer.gpu.adapter_label()
+            );
+            Ok(())
+        }
+        Command::Bench {
+            which: Bench::Splat(args),
+        } => guava::bench::splat(&args),
+    }
+}
+
+fn info() -> Result<()> {
+    let gpu = GpuContext::headless()?;
+    let info = gpu.adapter.get_info();
+    let limits = gpu.device.limits();
+    println!("adapter:   {}", gpu.adapter_label());
+    println!("driver:    {} {}", info.driver, info.driver_info);
+    println!("backend:   {:?}", info.backend);
+    println!(
+        "limits:    max storage buffer {} MiB, max buffer {} MiB, max texture {}, storage buffers/stage {}, workgroup storage {} B",
+        limits.max_storage_buffer_binding_size >> 20,
+        limits.max_buffer_size >> 20,
+        limits.max_texture_dimension_2d,
+        limits.max_storage_buffers_per_shader_stage,
+        limits.max_compute_workgroup_storage_size
+    );
+    println!(
+        "timestamps: {}",
+        if gpu
+            .device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+        {
+            "yes"
+        } else {
+            "no (benchmarks use CPU timers)"
+        }
+    );
+    match guava::onnx::OnnxRuntime::load() {
+        Ok(rt) => println!(
+            "onnxruntime: {} loaded from {}",
+            rt.version,
+            rt.library.display()
+        ),
+        Err(e) => println!("onnxruntime: not available: {e}"),
+    }
+    Ok(())
+}

@@ -1,0 +1,54 @@
+//! `#[repr(C)]` mirrors of the WGSL structs in shaders/common.wgsl and the pass files. The test
+//! `wgsl_layouts_match_rust` (tests/shaders.rs) reflects the WGSL with naga and fails on any drift.
+
+use bytemuck::{Pod, Zeroable};
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct FrameUniform {
+    pub view_from_world: [[f32; 4]; 4],
+    pub focal: [f32; 2],
+    pub principal: [f32; 2],
+    pub ewa_lim: [f32; 4],
+    pub size: [u32; 2],
+    pub tiles: [u32; 2],
+    pub near: f32,
+    pub num_gaussians: u32,
+    pub pair_capacity: u32,
+    pub channels: u32,
+}
+const _: () = assert!(size_of::<FrameUniform>() == 128);
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuGaussian {
+    pub pos: [f32; 3],
+    pub opacity: f32,
+    pub rot: [f32; 4],
+    pub scale: [f32; 3],
+    pub _pad: f32,
+}
+const _: () = assert!(size_of::<GpuGaussian>() == 48);
+
+/// Written by preprocess, read by binning and rasterization; never touched by the CPU.
+pub const PROJECTED_SIZE: u64 = 48;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ScanParams {
+    pub count: u32,
+    pub num_blocks: u32,
+    pub total_index: u32,
+    pub _pad: u32,
+}
+const _: () = assert!(size_of::<ScanParams>() == 16);
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct SortPass {
+    pub shift: u32,
+    pub num_blocks: u32,
+    pub count_index: u32,
+    pub _pad: u32,
+}
+const _: () = assert!(size_of::<SortPass>() == 16);

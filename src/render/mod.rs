@@ -1,0 +1,203 @@
+//! Gaussian splatting: the wgpu pass ([`splatter`]), the f64 CPU reference it is tested against
+//! ([`reference`]), and the present pass that shows the output in a window ([`present`]).
+
+pub mod layout;
+pub mod pipelines;
+pub mod present;
+pub mod readback;
+pub mod reference;
+mod scan;
+pub mod shader;
+mod sort;
+pub mod splatter;
+pub mod timing;
+
+pub use pipelines::SplatPipelines;
+pub use splatter::{Splatter, Stage};
+
+use crate::camera::Camera;
+use crate::gaussians::GaussianCloud;
+use crate::gpu::GpuContext;
+use std::sync::Arc;
+
+#[derive(Debug, thiserror::Error)]
+pub enum SplatError {
+    #[error(
+        "{count} Gaussians with {channels} channels do not fit this adapter's largest storage buffer \
+         (at most {max} Gaussians at this channel count)"
+    )]
+    TooManyGaussians { count: u64, channels: u32, max: u64 },
+}
+
+/// Tile side in pixels (`config.h`: BLOCK_X = BLOCK_Y = 16).
+pub const TILE_SIZE: u32 = 16;
+
+/// A rendered C-channel image on the CPU: channel-major planes like the reference's [C, H, W].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SplatImage {
+    pub width: u32,
+    pub height: u32,
+    pub channels: usize,
+    pub features: Vec<f32>,
+    /// Accumulated alpha, 1 − T.
+    pub alpha: Vec<f32>,
+    /// Σ αᵢTᵢ/zᵢ, the reference's `invdepth` output.
+    pub inv_depth: Vec<f32>,
+}
+
+impl SplatImage {
+    pub fn new(width: u32, height: u32, channels: usize) -> Self {
+        let n = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            channels,
+            features: vec![0.0; n * channels],
+            alpha: vec![0.0; n],
+            inv_depth: vec![0.0; n],
+        }
+    }
+
+    pub fn plane(&self, channel: usize) -> &[f32] {
+        let n = self.width as usize * self.height as usize;
+        &self.features[channel * n..(channel + 1) * n]
+    }
+
+    /// Channels 0..3 (or the one channel, as grey) as 8-bit RGB, clamped to [0, 1].
+    pub fn to_rgb8(&self) -> image::RgbImage {
+        let pick = |c: usize| self.plane(c.min(self.channels - 1));
+        let (r, g, b) = (pick(0), pick(1), pick(2));
+        let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+        image::RgbImage::from_fn(self.width, self.height, |x, y| {
+            let i = (y * self.width + x) as usize;
+            image::Rgb([q(r[i]), q(g[i]), q(b[i])])
+        })
+    }
+}
+
+/// What a frame drew and what it left out. The culled counts partition `input − visible`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RenderStats {
+    pub input: u64,
+    /// NaN or Inf in any attribute: dropped, never drawn.
+    pub nonfinite: u64,
+    /// Centre at or in front of the near plane (z ≤ 0.2).
+    pub near: u64,
+    /// Opacity below 1/255: can never pass the alpha test.
+    pub transparent: u64,
+    /// Singular or non-finite projected covariance.
+    pub degenerate: u64,
+    /// 3σ footprint entirely off screen.
+    pub outside: u64,
+    pub visible: u64,
+    /// (tile, Gaussian) pairs drawn.
+    pub tile_pairs: u64,
+    /// Pairs the frame needed; more than `tile_pairs` only if the buffers could not grow.
+    pub tile_pairs_needed: u64,
+}
+
+impl RenderStats {
+    pub(crate) fn count_culled(&mut self, why: reference::Culled) {
+        use reference::Culled::*;
+        match why {
+            NonFinite => self.nonfinite += 1,
+            Near => self.near += 1,
+            Transparent => self.transparent += 1,
+            Degenerate => self.degenerate += 1,
+            Outside => self.outside += 1,
+        }
+    }
+
+    /// From the GPU stats buffer (order fixed in shaders/common.wgsl).
+    pub fn from_words(input: u32, w: &[u32]) -> Self {
+        Self {
+            input: input as u64,
+            nonfinite: w[0] as u64,
+            near: w[1] as u64,
+            transparent: w[2] as u64,
+            degenerate: w[3] as u64,
+            outside: w[4] as u64,
+            visible: w[5] as u64,
+            tile_pairs_needed: w[6] as u64,
+            tile_pairs: w[7] as u64,
+        }
+    }
+
+    pub fn culled(&self) -> u64 {
+        self.nonfinite + self.near + self.transparent + self.degenerate + self.outside
+    }
+}
+
+/// The splatting pass on a headless device: upload, render, read back. For the CLI, tests and
+/// benchmarks; the viewer drives a [`Splatter`] on egui's device instead.
+pub struct HeadlessRenderer {
+    pub gpu: GpuContext,
+    pub pipelines: Arc<SplatPipelines>,
+    pub splatter: Splatter,
+}
+
+impl HeadlessRenderer {
+    pub fn new(gpu: GpuContext) -> Self {
+        let pipelines = Arc::new(SplatPipelines::new(&gpu.device));
+        let splatter = Splatter::new(&gpu.device, pipelines.clone());
+        Self {
+            gpu,
+            pipelines,
+            splatter,
+        }
+    }
+
+    /// Uploads `cloud` and renders it; grows the pair buffers and re-renders if a frame overflowed.
+    pub fn render(
+        &mut self,
+        cloud: &GaussianCloud,
+        camera: &Camera,
+        background: &[f32],
+    ) -> Result<(SplatImage, RenderStats), SplatError> {
+        let (device, queue) = (&self.gpu.device, &self.gpu.queue);
+        self.splatter.upload(device, queue, cloud)?;
+        Ok(self.render_uploaded(camera, background))
+    }
+
+    /// Renders the cloud already uploaded (benchmarks upload once and render many times).
+    pub fn render_uploaded(
+        &mut self,
+        camera: &Camera,
+        background: &[f32],
+    ) -> (SplatImage, RenderStats) {
+        let stats = self.draw(camera, background);
+        let (device, queue) = (&self.gpu.device, &self.gpu.queue);
+        let image = self
+            .splatter
+            .read_image(device, queue)
+            .unwrap_or_else(|| SplatImage::new(camera.width, camera.height, background.len()));
+        (image, stats)
+    }
+
+    /// Renders and waits, returning the stats but leaving the image on the GPU.
+    pub fn draw(&mut self, camera: &Camera, background: &[f32]) -> RenderStats {
+        loop {
+            let (device, queue) = (&self.gpu.device, &self.gpu.queue);
+            self.splatter.prepare(device, queue, camera, background);
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("headless splat"),
+            });
+            self.splatter.encode(&mut encoder, None);
+            queue.submit([encoder.finish()]);
+            let stats = self.splatter.read_stats(device, queue);
+            if !self.splatter.grow_for(device, &stats) {
+                return stats;
+            }
+        }
+    }
+}
+
+/// Writes a PNG through a temporary file renamed into place (never a half-written image).
+pub fn save_png(image: &image::RgbImage, path: &std::path::Path) -> anyhow::Result<()> {
+    use anyhow::Context;
+    let tmp = path.with_extension("png.tmp");
+    image
+        .save_with_format(&tmp, image::ImageFormat::Png)
+        .with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+}

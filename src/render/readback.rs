@@ -1,0 +1,106 @@
+//! The one place the splatting pass waits for the GPU: copy buffers to staging, map, wait.
+//! The frame loop never calls this; headless rendering, tests and benchmarks do.
+
+pub fn read_buffers(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    sources: &[(&wgpu::Buffer, u64)],
+) -> Vec<Vec<u8>> {
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("readback"),
+    });
+    let staging: Vec<_> = sources
+        .iter()
+        .map(|(src, size)| {
+            let dst = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback::staging"),
+                size: *size,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            encoder.copy_buffer_to_buffer(src, 0, &dst, 0, *size);
+            dst
+        })
+        .collect();
+    queue.submit([encoder.finish()]);
+    for buf in &staging {
+        buf.slice(..).map_async(wgpu::MapMode::Read, |r| {
+            if let Err(e) = r {
+                log::error!("readback map failed: {e}");
+            }
+        });
+    }
+    wait(device);
+    staging
+        .iter()
+        .map(|buf| {
+            let bytes = buf
+                .slice(..)
+                .get_mapped_range()
+                .map(|view| view.to_vec())
+                .unwrap_or_default();
+            buf.unmap();
+            bytes
+        })
+        .collect()
+}
+
+/// Blocks until the queue is idle.
+pub fn wait(device: &wgpu::Device) {
+    if let Err(e) = device.poll(wgpu::PollType::wait_indefinitely()) {
+        log::error!("waiting for the GPU failed: {e}");
+    }
+}
+
+/// All layers of an r32float 2D array texture as one f32 vector, layer-major ([L, H, W]).
+/// Rows are padded to wgpu's 256-byte copy alignment on the GPU and unpadded here.
+pub fn read_texture_layers(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Vec<f32> {
+    let size = texture.size();
+    let (w, h, layers) = (
+        size.width as usize,
+        size.height as usize,
+        size.depth_or_array_layers as usize,
+    );
+    let row = w * 4;
+    let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback::texture"),
+        size: (padded * h * layers) as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("readback::texture"),
+    });
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &staging,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded as u32),
+                rows_per_image: Some(h as u32),
+            },
+        },
+        size,
+    );
+    queue.submit([encoder.finish()]);
+    staging.slice(..).map_async(wgpu::MapMode::Read, |r| {
+        if let Err(e) = r {
+            log::error!("texture readback map failed: {e}");
+        }
+    });
+    wait(device);
+    let mut out = Vec::with_capacity(w * h * layers);
+    if let Ok(view) = staging.slice(..).get_mapped_range() {
+        for chunk in view.chunks_exact(padded) {
+            out.extend_from_slice(bytemuck::cast_slice(&chunk[..row]));
+        }
+    }
+    staging.unmap();
+    out
+}

@@ -1,0 +1,45 @@
+//! WGSL sources, compiled into the binary, and the one way they are composed: `const` overrides,
+//! then shaders/common.wgsl, then the pass. Every pass is built through [`compose`].
+
+pub const COMMON: &str = include_str!("../../shaders/common.wgsl");
+pub const PREPROCESS: &str = include_str!("../../shaders/preprocess.wgsl");
+pub const SCAN: &str = include_str!("../../shaders/scan.wgsl");
+pub const RADIX_SORT: &str = include_str!("../../shaders/radix_sort.wgsl");
+pub const TILE_KEYS: &str = include_str!("../../shaders/tile_keys.wgsl");
+pub const TILE_RANGES: &str = include_str!("../../shaders/tile_ranges.wgsl");
+pub const RASTERIZE: &str = include_str!("../../shaders/rasterize.wgsl");
+pub const PRESENT: &str = include_str!("../../shaders/present.wgsl");
+
+/// Every pass with the constants it needs to compile (CHANNELS = 3 stands in for any count).
+pub const ALL: &[(&str, &str, &[(&str, u32)])] = &[
+    ("preprocess", PREPROCESS, &[]),
+    ("scan", SCAN, &[]),
+    ("radix_sort", RADIX_SORT, &[]),
+    ("tile_keys", TILE_KEYS, &[]),
+    ("tile_ranges", TILE_RANGES, &[]),
+    ("rasterize", RASTERIZE, &[("CHANNELS", 3)]),
+    ("present", PRESENT, &[]),
+];
+
+pub fn compose(pass: &str, consts: &[(&str, u32)]) -> String {
+    let mut out = String::new();
+    for (name, value) in consts {
+        out.push_str(&format!("const {name}: u32 = {value}u;\n"));
+    }
+    out.push_str(COMMON);
+    out.push('\n');
+    out.push_str(pass);
+    out
+}
+
+pub fn module(
+    device: &wgpu::Device,
+    label: &str,
+    pass: &str,
+    consts: &[(&str, u32)],
+) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(compose(pass, consts).into()),
+    })
+}

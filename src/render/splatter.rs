@@ -1,0 +1,638 @@
+//! The wgpu splatting pass for one view: owns the cloud's GPU buffers and the view's work and
+//! output buffers, and records preprocess → depth sort → tile keys → tile sort → tile ranges →
+//! rasterize into an encoder. Buffers are reused across frames and only reallocated when the cloud,
+//! the channel count, the resolution or the tile-pair count outgrows them.
+//!
+//! The output stays on the GPU: `features()` is an r32float texture array with one layer per channel
+//! (the reference's [C, H, W]) for the refiner and the present pass; `aux()` holds alpha (layer 0)
+//! and inverse depth (layer 1).
+
+use super::layout::{FrameUniform, GpuGaussian, PROJECTED_SIZE};
+use super::pipelines::{SplatPipelines, dispatch_1d};
+use super::readback::{read_buffers, read_texture_layers};
+use super::scan::{PrefixScan, entry};
+use super::sort::{RadixSort, SortBuffers};
+use super::timing::StageTimer;
+use super::{RenderStats, SplatError, SplatImage};
+use crate::camera::Camera;
+use crate::gaussians::GaussianCloud;
+use std::sync::Arc;
+
+/// The GPU stages, in order; benchmarks time each.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    Preprocess,
+    DepthSort,
+    TileKeys,
+    TileSort,
+    TileRanges,
+    Rasterize,
+}
+
+impl Stage {
+    pub const ALL: [Stage; 6] = [
+        Stage::Preprocess,
+        Stage::DepthSort,
+        Stage::TileKeys,
+        Stage::TileSort,
+        Stage::TileRanges,
+        Stage::Rasterize,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Preprocess => "preprocess",
+            Stage::DepthSort => "depth sort",
+            Stage::TileKeys => "tile keys",
+            Stage::TileSort => "tile sort",
+            Stage::TileRanges => "tile ranges",
+            Stage::Rasterize => "rasterize",
+        }
+    }
+}
+
+const STATS_WORDS: u64 = 8;
+const MIN_GAUSSIANS: u32 = 256;
+const MIN_PAIRS: u32 = 1 << 16;
+
+struct CloudBuffers {
+    capacity: u32,
+    channels: u32,
+    gaussians: wgpu::Buffer,
+    features: wgpu::Buffer,
+    projected: wgpu::Buffer,
+    depth_keys: wgpu::Buffer,
+    depth_order: wgpu::Buffer,
+    depth_keys_tmp: wgpu::Buffer,
+    depth_order_tmp: wgpu::Buffer,
+    touched: wgpu::Buffer,
+    pair_offsets: wgpu::Buffer,
+}
+
+struct ViewBuffers {
+    width: u32,
+    height: u32,
+    channels: u32,
+    pair_capacity: u32,
+    tile_keys: wgpu::Buffer,
+    tile_vals: wgpu::Buffer,
+    tile_keys_tmp: wgpu::Buffer,
+    tile_vals_tmp: wgpu::Buffer,
+    ranges: wgpu::Buffer,
+    out_features: wgpu::Texture,
+    out_aux: wgpu::Texture,
+    background: wgpu::Buffer,
+}
+
+struct Bindings {
+    preprocess: wgpu::BindGroup,
+    depth_sort: RadixSort,
+    pair_scan: PrefixScan,
+    keys: wgpu::BindGroup,
+    tile_sort: RadixSort,
+    ranges: wgpu::BindGroup,
+    rasterize: wgpu::BindGroup,
+    rasterize_pipeline: wgpu::ComputePipeline,
+}
+
+pub struct Splatter {
+    pipes: Arc<SplatPipelines>,
+    frame: wgpu::Buffer,
+    stats: wgpu::Buffer,
+    /// [0] pairs needed, [1] pairs kept.
+    pair_count: wgpu::Buffer,
+    /// [0] number of Gaussians: the depth sort's element count.
+    depth_count: wgpu::Buffer,
+    cloud: Option<CloudBuffers>,
+    view: Option<ViewBuffers>,
+    bindings: Option<Bindings>,
+    num_gaussians: u32,
+    camera: Option<Camera>,
+    max_pairs: u32,
+}
+
+fn storage(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
+}
+
+fn output_texture(
+    device: &wgpu::Device,
+    label: &str,
+    camera: &Camera,
+    layers: u32,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: camera.width,
+            height: camera.height,
+            depth_or_array_layers: layers,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::R32Float,
+        usage: wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
+/// The largest cloud with `channels` channels whose buffers the device can bind.
+pub fn max_gaussians(limits: &wgpu::Limits, channels: u32) -> u64 {
+    let max_binding = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    let per_gaussian = (channels as u64 * 4).max(size_of::<GpuGaussian>() as u64);
+    (max_binding / per_gaussian).min(u32::MAX as u64)
+}
+
+/// A view of every layer as a 2D array, also for single-layer textures (whose default view is 2D).
+pub fn array_view(texture: &wgpu::Texture) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    })
+}
+
+impl Splatter {
+    pub fn new(device: &wgpu::Device, pipes: Arc<SplatPipelines>) -> Self {
+        let limits = device.limits();
+        let max_bytes = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        Self {
+            frame: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("Splat::frame"),
+                size: size_of::<FrameUniform>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            stats: storage(device, "Splat::stats", STATS_WORDS * 4),
+            pair_count: storage(device, "Splat::pair_count", 8),
+            depth_count: storage(device, "Splat::depth_count", 4),
+            pipes,
+            cloud: None,
+            view: None,
+            bindings: None,
+            num_gaussians: 0,
+            camera: None,
+            max_pairs: (max_bytes / 4).min(u32::MAX as u64) as u32,
+        }
+    }
+
+    pub fn num_gaussians(&self) -> u32 {
+        self.num_gaussians
+    }
+
+    pub fn channels(&self) -> Option<u32> {
+        self.cloud.as_ref().map(|c| c.channels)
+    }
+
+    /// Uploads a cloud; reallocates (with headroom) only if it outgrows the buffers or changes
+    /// channel count. Fails, keeping the previous cloud, if the adapter cannot bind buffers this big.
+    pub fn upload(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        cloud: &GaussianCloud,
+    ) -> Result<(), SplatError> {
+        let channels = cloud.channels as u32;
+        let max_count = max_gaussians(&device.limits(), channels);
+        if cloud.len() as u64 > max_count {
+            return Err(SplatError::TooManyGaussians {
+                count: cloud.len() as u64,
+                channels,
+                max: max_count,
+            });
+        }
+        let n = cloud.len() as u32;
+        let fits = self
+            .cloud
+            .as_ref()
+            .is_some_and(|c| c.capacity >= n && c.channels == channels);
+        if !fits {
+            let capacity = (n as u64 + n as u64 / 4)
+                .clamp(MIN_GAUSSIANS as u64, max_count.max(MIN_GAUSSIANS as u64))
+                as u32;
+            self.cloud = Some(Self::alloc_cloud(device, capacity, channels));
+            self.bindings = None;
+        }
+        let Some(buffers) = &self.cloud else {
+            return Ok(());
+        };
+        let gpu: Vec<GpuGaussian> = (0..cloud.len())
+            .map(|i| GpuGaussian {
+                pos: cloud.positions[i],
+                opacity: cloud.opacities[i],
+                rot: cloud.rotations[i],
+                scale: cloud.scales[i],
+                _pad: 0.0,
+            })
+            .collect();
+        queue.write_buffer(&buffers.gaussians, 0, bytemuck::cast_slice(&gpu));
+        queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(&cloud.features));
+        queue.write_buffer(&self.depth_count, 0, bytemuck::bytes_of(&n));
+        self.num_gaussians = n;
+        Ok(())
+    }
+
+    fn alloc_cloud(device: &wgpu::Device, capacity: u32, channels: u32) -> CloudBuffers {
+        let n = capacity as u64;
+        CloudBuffers {
+            capacity,
+            channels,
+            gaussians: storage(
+                device,
+                "Splat::gaussians",
+                n * size_of::<GpuGaussian>() as u64,
+            ),
+            features: storage(device, "Splat::features", n * channels as u64 * 4),
+            projected: storage(device, "Splat::projected", n * PROJECTED_SIZE),
+            depth_keys: storage(device, "Splat::depth_keys", n * 4),
+            depth_order: storage(device, "Splat::depth_order", n * 4),
+            depth_keys_tmp: storage(device, "Splat::depth_keys_tmp", n * 4),
+            depth_order_tmp: storage(device, "Splat::depth_order_tmp", n * 4),
+            touched: storage(device, "Splat::touched", n * 4),
+            pair_offsets: storage(device, "Splat::pair_offsets", n * 4),
+        }
+    }
+
+    /// Sets the camera and background for the next [`Self::encode`]; sizes the view's buffers.
+    /// Call after [`Self::upload`]. `background` has one value per channel.
+    pub fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        camera: &Camera,
+        background: &[f32],
+    ) {
+        let Some(cloud) = &self.cloud else {
+            panic!("Splatter::prepare before any upload");
+        };
+        assert_eq!(
+            background.len() as u32,
+            cloud.channels,
+            "one background value per channel"
+        );
+        assert!(
+            camera.width > 0 && camera.height > 0,
+            "camera image must be at least 1×1"
+        );
+        let max_side = device.limits().max_texture_dimension_2d;
+        assert!(
+            camera.width <= max_side && camera.height <= max_side,
+            "image {}×{} exceeds the adapter's {max_side}² texture limit",
+            camera.width,
+            camera.height
+        );
+        let channels = cloud.channels;
+        let pair_capacity = self.view.as_ref().map_or(0, |v| v.pair_capacity);
+        let wanted_pairs = pair_capacity
+            .max(self.num_gaussians.saturating_mul(4))
+            .max(MIN_PAIRS)
+            .min(self.max_pairs);
+        let fits = self.view.as_ref().is_some_and(|v| {
+            v.width == camera.width
+                && v.height == camera.height
+                && v.channels == channels
+                && v.pair_capacity >= wanted_pairs
+        });
+        if !fits {
+            self.view = Some(Self::alloc_view(device, camera, channels, wanted_pairs));
+            self.bindings = None;
+        }
+        if self.bindings.is_none() {
+            self.bindings = Some(self.bind(device, camera));
+        }
+        let (tiles_x, tiles_y) = camera.tiles();
+        let Some(view) = &self.view else { return };
+        let frame = FrameUniform {
+            view_from_world: camera.view_from_world.to_cols_array_2d(),
+            focal: [camera.fx, camera.fy],
+            principal: [camera.cx - 0.5, camera.cy - 0.5],
+            ewa_lim: camera.ewa_limits(),
+            size: [camera.width, camera.height],
+            tiles: [tiles_x, tiles_y],
+            near: camera.near,
+            num_gaussians: self.num_gaussians,
+            pair_capacity: view.pair_capacity,
+            channels,
+        };
+        queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
+        queue.write_buffer(&view.background, 0, bytemuck::cast_slice(background));
+        self.camera = Some(*camera);
+    }
+
+    fn alloc_view(
+        device: &wgpu::Device,
+        camera: &Camera,
+        channels: u32,
+        pair_capacity: u32,
+    ) -> ViewBuffers {
+        let (tx, ty) = camera.tiles();
+        let pairs = pair_capacity as u64;
+        ViewBuffers {
+            width: camera.width,
+            height: camera.height,
+            channels,
+            pair_capacity,
+            tile_keys: storage(device, "Splat::tile_keys", pairs * 4),
+            tile_vals: storage(device, "Splat::tile_vals", pairs * 4),
+            tile_keys_tmp: storage(device, "Splat::tile_keys_tmp", pairs * 4),
+            tile_vals_tmp: storage(device, "Splat::tile_vals_tmp", pairs * 4),
+            ranges: storage(device, "Splat::tile_ranges", tx as u64 * ty as u64 * 8),
+            out_features: output_texture(device, "Splat::out_features", camera, channels),
+            out_aux: output_texture(device, "Splat::out_aux", camera, 2),
+            background: storage(device, "Splat::background", channels as u64 * 4),
+        }
+    }
+
+    fn bind(&self, device: &wgpu::Device, camera: &Camera) -> Bindings {
+        let (Some(c), Some(v)) = (&self.cloud, &self.view) else {
+            unreachable!("bind is called after both buffer sets exist");
+        };
+        let pipes = &*self.pipes;
+        let group = |label: &str, layout: &wgpu::BindGroupLayout, buffers: &[&wgpu::Buffer]| {
+            let entries: Vec<_> = buffers
+                .iter()
+                .enumerate()
+                .map(|(i, b)| entry(i as u32, b))
+                .collect();
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout,
+                entries: &entries,
+            })
+        };
+        let preprocess = group(
+            "Splat::preprocess",
+            &pipes.preprocess_layout,
+            &[
+                &self.frame,
+                &c.gaussians,
+                &c.features,
+                &c.projected,
+                &c.depth_keys,
+                &c.depth_order,
+                &c.touched,
+                &self.stats,
+            ],
+        );
+        let depth_sort = RadixSort::new(
+            device,
+            pipes,
+            "Splat::depth_sort",
+            SortBuffers {
+                count: &self.depth_count,
+                count_index: 0,
+                keys_a: &c.depth_keys,
+                vals_a: &c.depth_order,
+                keys_b: &c.depth_keys_tmp,
+                vals_b: &c.depth_order_tmp,
+            },
+            c.capacity,
+            32,
+        );
+        let pair_scan = PrefixScan::new(
+            device,
+            pipes,
+            "Splat::pair_scan",
+            &c.pair_offsets,
+            c.capacity,
+            &self.pair_count,
+            0,
+        );
+        let keys = group(
+            "Splat::tile_keys",
+            &pipes.keys_layout,
+            &[
+                &self.frame,
+                &c.depth_order,
+                &c.touched,
+                &c.pair_offsets,
+                &c.projected,
+                &v.tile_keys,
+                &v.tile_vals,
+                &self.pair_count,
+                &self.stats,
+            ],
+        );
+        let (tx, ty) = camera.tiles();
+        let tile_bits = 32 - (tx * ty).saturating_sub(1).leading_zeros();
+        let tile_sort = RadixSort::new(
+            device,
+            pipes,
+            "Splat::tile_sort",
+            SortBuffers {
+                count: &self.pair_count,
+                count_index: 1,
+                keys_a: &v.tile_keys,
+                vals_a: &v.tile_vals,
+                keys_b: &v.tile_keys_tmp,
+                vals_b: &v.tile_vals_tmp,
+            },
+            v.pair_capacity,
+            tile_bits,
+        );
+        let ranges = group(
+            "Splat::tile_ranges",
+            &pipes.ranges_layout,
+            &[&v.tile_keys, &self.pair_count, &v.ranges],
+        );
+        let features_view = array_view(&v.out_features);
+        let aux_view = array_view(&v.out_aux);
+        let rasterize = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("Splat::rasterize"),
+            layout: &pipes.rasterize_layout,
+            entries: &[
+                entry(0, &self.frame),
+                entry(1, &v.ranges),
+                entry(2, &v.tile_vals),
+                entry(3, &c.projected),
+                entry(4, &c.features),
+                entry(5, &v.background),
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::TextureView(&features_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: wgpu::BindingResource::TextureView(&aux_view),
+                },
+            ],
+        });
+        Bindings {
+            preprocess,
+            depth_sort,
+            pair_scan,
+            keys,
+            tile_sort,
+            ranges,
+            rasterize,
+            rasterize_pipeline: pipes.rasterize(device, c.channels),
+        }
+    }
+
+    /// Records the whole pass. [`Self::prepare`] must have been called for this frame.
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&StageTimer>) {
+        for stage in Stage::ALL {
+            self.encode_stage(encoder, stage, timer);
+        }
+    }
+
+    /// Records one stage (benchmarks submit stages one by one when timestamps are unavailable).
+    pub fn encode_stage(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        stage: Stage,
+        timer: Option<&StageTimer>,
+    ) {
+        let (Some(b), Some(v), Some(camera)) = (&self.bindings, &self.view, &self.camera) else {
+            log::warn!("splatting pass encoded before prepare; skipped");
+            return;
+        };
+        let pipes = &*self.pipes;
+        let gaussian_groups = self.num_gaussians.div_ceil(256);
+        match stage {
+            Stage::Preprocess => {
+                encoder.clear_buffer(&self.stats, 0, None);
+                encoder.clear_buffer(&v.ranges, 0, None);
+            }
+            Stage::TileKeys => encoder.clear_buffer(&self.pair_count, 0, None),
+            _ => {}
+        }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(stage.name()),
+            timestamp_writes: timer.map(|t| t.writes(stage)),
+        });
+        match stage {
+            Stage::Preprocess => {
+                pass.set_pipeline(&pipes.preprocess);
+                pass.set_bind_group(0, &b.preprocess, &[]);
+                dispatch_1d(&mut pass, gaussian_groups);
+            }
+            Stage::DepthSort => b.depth_sort.encode(pipes, &mut pass),
+            Stage::TileKeys => {
+                pass.set_bind_group(0, &b.keys, &[]);
+                pass.set_pipeline(&pipes.gather_counts);
+                dispatch_1d(&mut pass, gaussian_groups);
+                b.pair_scan.encode(pipes, &mut pass);
+                pass.set_bind_group(0, &b.keys, &[]);
+                pass.set_pipeline(&pipes.clamp_pairs);
+                pass.dispatch_workgroups(1, 1, 1);
+                pass.set_pipeline(&pipes.emit_keys);
+                dispatch_1d(&mut pass, gaussian_groups);
+            }
+            Stage::TileSort => b.tile_sort.encode(pipes, &mut pass),
+            Stage::TileRanges => {
+                pass.set_pipeline(&pipes.tile_ranges);
+                pass.set_bind_group(0, &b.ranges, &[]);
+                dispatch_1d(&mut pass, v.pair_capacity.div_ceil(256));
+            }
+            Stage::Rasterize => {
+                let (tx, ty) = camera.tiles();
+                pass.set_pipeline(&b.rasterize_pipeline);
+                pass.set_bind_group(0, &b.rasterize, &[]);
+                pass.dispatch_workgroups(tx, ty, 1);
+            }
+        }
+    }
+
+    /// If the last frame needed more tile pairs than fit, grows the pair buffers (once, with
+    /// headroom) and returns true: the caller should render again. False when it fits, or when
+    /// the device's buffer limit is reached (pairs past it stay dropped and `stats` says so).
+    pub fn grow_for(&mut self, device: &wgpu::Device, stats: &RenderStats) -> bool {
+        let Some(view) = &self.view else { return false };
+        if stats.tile_pairs_needed <= view.pair_capacity as u64
+            || view.pair_capacity >= self.max_pairs
+        {
+            return false;
+        }
+        let wanted = (stats.tile_pairs_needed + stats.tile_pairs_needed / 4)
+            .min(self.max_pairs as u64) as u32;
+        let Some(camera) = self.camera else {
+            return false;
+        };
+        self.view = Some(Self::alloc_view(device, &camera, view.channels, wanted));
+        self.bindings = Some(self.bind(device, &camera));
+        true
+    }
+
+    /// The C feature layers (r32float, [C, H, W]), on the GPU.
+    pub fn features(&self) -> Option<&wgpu::Texture> {
+        self.view.as_ref().map(|v| &v.out_features)
+    }
+
+    /// Alpha layer then inverse-depth layer (r32float, [2, H, W]), on the GPU.
+    pub fn aux(&self) -> Option<&wgpu::Texture> {
+        self.view.as_ref().map(|v| &v.out_aux)
+    }
+
+    pub fn stats_buffer(&self) -> &wgpu::Buffer {
+        &self.stats
+    }
+
+    pub fn read_stats(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> RenderStats {
+        let bytes = read_buffers(device, queue, &[(&self.stats, STATS_WORDS * 4)]);
+        RenderStats::from_words(self.num_gaussians, bytemuck::cast_slice(&bytes[0]))
+    }
+
+    /// Copies the output to the CPU (waits for the GPU).
+    pub fn read_image(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Option<SplatImage> {
+        let v = self.view.as_ref()?;
+        let pixels = v.width as usize * v.height as usize;
+        let features = read_texture_layers(device, queue, &v.out_features);
+        let mut aux = read_texture_layers(device, queue, &v.out_aux);
+        let inv_depth = aux.split_off(pixels);
+        Some(SplatImage {
+            width: v.width,
+            height: v.height,
+            channels: v.channels as usize,
+            features,
+            alpha: aux,
+            inv_depth,
+        })
+    }
+
+    /// GPU memory held: (bytes per Gaussian of capacity, bytes per tile pair of capacity, the rest).
+    pub fn memory(&self) -> MemoryUse {
+        let per_gaussian = |c: &CloudBuffers| {
+            size_of::<GpuGaussian>() as u64 + c.channels as u64 * 4 + PROJECTED_SIZE + 6 * 4
+        };
+        MemoryUse {
+            gaussian_capacity: self.cloud.as_ref().map_or(0, |c| c.capacity as u64),
+            bytes_per_gaussian: self.cloud.as_ref().map_or(0, per_gaussian),
+            pair_capacity: self.view.as_ref().map_or(0, |v| v.pair_capacity as u64),
+            bytes_per_pair: 16,
+            image_bytes: self.view.as_ref().map_or(0, |v| {
+                v.width as u64 * v.height as u64 * (v.channels as u64 + 2) * 4
+            }),
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MemoryUse {
+    pub gaussian_capacity: u64,
+    pub bytes_per_gaussian: u64,
+    pub pair_capacity: u64,
+    pub bytes_per_pair: u64,
+    pub image_bytes: u64,
+}
+
+impl MemoryUse {
+    pub fn total(&self) -> u64 {
+        self.gaussian_capacity * self.bytes_per_gaussian
+            + self.pair_capacity * self.bytes_per_pair
+            + self.image_bytes
+    }
+}

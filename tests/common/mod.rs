@@ -1,0 +1,70 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use guava::gpu::GpuContext;
+use guava::render::{HeadlessRenderer, SplatImage};
+
+/// A renderer on the test machine's adapter (lavapipe in CI). Validation errors panic (wgpu's
+/// default uncaptured-error handler), so any invalid GPU use fails the test.
+pub fn renderer() -> HeadlessRenderer {
+    let gpu = GpuContext::headless()
+        .expect("a Vulkan adapter (lavapipe: apt-get install mesa-vulkan-drivers)");
+    HeadlessRenderer::new(gpu)
+}
+
+/// Comparison of two renders over every feature channel, alpha and inverse depth.
+#[derive(Debug)]
+pub struct Diff {
+    pub psnr_db: f64,
+    pub max_abs: f64,
+    pub max_abs_alpha: f64,
+    pub max_rel_inv_depth: f64,
+}
+
+pub fn diff(a: &SplatImage, b: &SplatImage) -> Diff {
+    assert_eq!(
+        (a.width, a.height, a.channels),
+        (b.width, b.height, b.channels)
+    );
+    let mut se = 0.0;
+    let mut max_abs: f64 = 0.0;
+    for (x, y) in a.features.iter().zip(&b.features) {
+        let d = (*x as f64 - *y as f64).abs();
+        se += d * d;
+        max_abs = max_abs.max(d);
+    }
+    let mse = se / a.features.len() as f64;
+    let max_abs_alpha = a
+        .alpha
+        .iter()
+        .zip(&b.alpha)
+        .map(|(x, y)| (x - y).abs() as f64)
+        .fold(0.0, f64::max);
+    let max_rel_inv_depth = a
+        .inv_depth
+        .iter()
+        .zip(&b.inv_depth)
+        .map(|(x, y)| (x - y).abs() as f64 / (y.abs() as f64).max(1e-3))
+        .fold(0.0, f64::max);
+    Diff {
+        psnr_db: if mse == 0.0 {
+            f64::INFINITY
+        } else {
+            10.0 * (1.0 / mse).log10()
+        },
+        max_abs,
+        max_abs_alpha,
+        max_rel_inv_depth,
+    }
+}
+
+pub fn assert_all_finite(image: &SplatImage, what: &str) {
+    let bad = image
+        .features
+        .iter()
+        .chain(&image.alpha)
+        .chain(&image.inv_depth)
+        .filter(|v| !v.is_finite())
+        .count();
+    assert_eq!(bad, 0, "{what}: {bad} non-finite output values");
+}

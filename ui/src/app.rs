@@ -1,0 +1,520 @@
+//! The viewer window: menu, scene panel with camera and render controls and the HUD, status bar,
+//! drag-and-drop, and the viewport. Loading runs on a worker thread with progress and Cancel.
+
+use crate::orbit::OrbitCamera;
+use crate::viewport::{
+    DisplaySettings, SceneRef, SplatCallback, ViewportReport, ViewportResources,
+};
+use guava::gaussians::GaussianCloud;
+use guava::render::present::PresentMode;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, TryRecvError};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+/// Start-up options from the command line.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    pub open: Option<PathBuf>,
+    pub test_scene: bool,
+    /// Save the window's own frame as PNG at frame `exit_after_frames`, then close.
+    pub screenshot: Option<PathBuf>,
+    pub exit_after_frames: Option<u64>,
+}
+
+struct Scene {
+    name: String,
+    /// Where it came from and what it is, shown in the panel (never "GUAVA avatar" unless it is one).
+    kind: &'static str,
+    cloud: Arc<GaussianCloud>,
+    generation: u64,
+}
+
+struct Loading {
+    path: PathBuf,
+    started: Instant,
+    rx: Receiver<Result<GaussianCloud, String>>,
+}
+
+pub struct GuavaApp {
+    options: Options,
+    scene: Option<Scene>,
+    next_generation: u64,
+    orbit: OrbitCamera,
+    display: DisplaySettings,
+    background: [f32; 3],
+    report: Arc<Mutex<ViewportReport>>,
+    loading: Option<Loading>,
+    status: Option<(String, bool)>,
+    frames: u64,
+    gpu_ready: bool,
+    adapter: String,
+    last_frame: Option<Instant>,
+    frame_ms: f32,
+}
+
+impl GuavaApp {
+    pub fn new(cc: &eframe::CreationContext<'_>, options: Options) -> Self {
+        let (gpu_ready, adapter) = match cc.wgpu_render_state.as_ref() {
+            Some(rs) => {
+                let resources = ViewportResources::new(&rs.device, rs.target_format);
+                rs.renderer.write().callback_resources.insert(resources);
+                (true, guava::gpu::adapter_label(&rs.adapter.get_info()))
+            }
+            None => (false, "no wgpu device".into()),
+        };
+        let mut app = Self {
+            options: options.clone(),
+            scene: None,
+            next_generation: 0,
+            orbit: OrbitCamera::default(),
+            display: DisplaySettings::default(),
+            background: [0.0; 3],
+            report: Arc::default(),
+            loading: None,
+            status: None,
+            frames: 0,
+            gpu_ready,
+            adapter,
+            last_frame: None,
+            frame_ms: 0.0,
+        };
+        if options.test_scene {
+            app.open_test_scene();
+        }
+        if let Some(path) = &options.open {
+            app.open(path.clone());
+        }
+        app
+    }
+
+    pub fn scene_len(&self) -> Option<usize> {
+        self.scene.as_ref().map(|s| s.cloud.len())
+    }
+
+    pub fn status(&self) -> Option<&str> {
+        self.status.as_ref().map(|(s, _)| s.as_str())
+    }
+
+    pub fn report(&self) -> ViewportReport {
+        self.report.lock().map(|r| r.clone()).unwrap_or_default()
+    }
+
+    fn set_scene(&mut self, name: String, kind: &'static str, cloud: GaussianCloud) {
+        self.next_generation += 1;
+        self.orbit = OrbitCamera::framing(&cloud, self.orbit.fov_y_rad);
+        let channels = cloud.channels as u32;
+        self.display.rgb_channels = self.display.rgb_channels.map(|c| c.min(channels - 1));
+        self.status = Some((
+            format!(
+                "{name}: {} Gaussians, {} channels",
+                cloud.len(),
+                cloud.channels
+            ),
+            false,
+        ));
+        self.scene = Some(Scene {
+            name,
+            kind,
+            cloud: Arc::new(cloud),
+            generation: self.next_generation,
+        });
+    }
+
+    pub fn open_test_scene(&mut self) {
+        let cloud = guava::gaussians::synthetic::torus_knot(40_000, 1);
+        self.set_scene(
+            "test scene".into(),
+            "synthetic test scene (not an avatar)",
+            cloud,
+        );
+    }
+
+    /// Starts loading a file on a worker thread; the current scene stays until it succeeds.
+    pub fn open(&mut self, path: PathBuf) {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("ply") => {}
+            Some("png" | "jpg" | "jpeg") => {
+                self.error(format!(
+                    "{}: photo → avatar reconstruction is not implemented yet (see README, \"Missing\")",
+                    path.display()
+                ));
+                return;
+            }
+            _ => {
+                self.error(format!(
+                    "{}: unsupported file type (open a 3DGS .ply)",
+                    path.display()
+                ));
+                return;
+            }
+        }
+        let (tx, rx) = std::sync::mpsc::channel();
+        let worker_path = path.clone();
+        std::thread::spawn(move || {
+            let result = guava::gaussians::ply::read(&worker_path).map_err(|e| e.to_string());
+            // The receiver is gone if the user cancelled: nothing to do then.
+            let _ = tx.send(result);
+        });
+        self.loading = Some(Loading {
+            path,
+            started: Instant::now(),
+            rx,
+        });
+    }
+
+    fn error(&mut self, message: String) {
+        log::warn!("{message}");
+        self.status = Some((message, true));
+    }
+
+    fn poll_loading(&mut self) {
+        let Some(loading) = &self.loading else { return };
+        match loading.rx.try_recv() {
+            Err(TryRecvError::Empty) => {}
+            Err(TryRecvError::Disconnected) => {
+                let path = loading.path.display().to_string();
+                self.loading = None;
+                self.error(format!("{path}: loading stopped unexpectedly"));
+            }
+            Ok(result) => {
+                let path = loading.path.clone();
+                self.loading = None;
+                match result {
+                    Ok(cloud) if cloud.is_empty() => {
+                        self.error(format!("{}: the file has no Gaussians", path.display()))
+                    }
+                    Ok(cloud) => self.set_scene(file_name(&path), "3DGS PLY file", cloud),
+                    Err(e) => self.error(e),
+                }
+            }
+        }
+    }
+
+    fn save_ply_dialog(&mut self) {
+        let Some(scene) = &self.scene else { return };
+        let Some(path) = rfd::FileDialog::new()
+            .add_filter("3DGS PLY", &["ply"])
+            .set_file_name(format!("{}.ply", scene.name))
+            .save_file()
+        else {
+            return;
+        };
+        match guava::gaussians::ply::write(&path, &scene.cloud) {
+            Ok(()) => self.status = Some((format!("saved {}", path.display()), false)),
+            Err(e) => self.error(e.to_string()),
+        }
+    }
+
+    fn menu_ui(&mut self, ui: &mut egui::Ui) {
+        egui::MenuBar::new().ui(ui, |ui| {
+            ui.menu_button("File", |ui| {
+                if ui.button("Open…").clicked() {
+                    if let Some(path) = rfd::FileDialog::new()
+                        .add_filter("3DGS PLY", &["ply"])
+                        .pick_file()
+                    {
+                        self.open(path);
+                    }
+                    ui.close();
+                }
+                if ui.button("Open test scene").clicked() {
+                    self.open_test_scene();
+                    ui.close();
+                }
+                if ui
+                    .add_enabled(self.scene.is_some(), egui::Button::new("Save PLY as…"))
+                    .clicked()
+                {
+                    self.save_ply_dialog();
+                    ui.close();
+                }
+                ui.separator();
+                if ui.button("Quit").clicked() {
+                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            });
+            ui.menu_button("View", |ui| {
+                if ui.button("Reset camera").clicked() {
+                    self.reset_camera();
+                    ui.close();
+                }
+            });
+        });
+    }
+
+    fn reset_camera(&mut self) {
+        if let Some(scene) = &self.scene {
+            self.orbit = OrbitCamera::framing(&scene.cloud, self.orbit.fov_y_rad);
+        }
+    }
+
+    fn side_panel_ui(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Scene");
+        match &self.scene {
+            Some(s) => {
+                ui.label(format!("{} — {}", s.name, s.kind));
+                ui.label(format!(
+                    "{} Gaussians · {} channels",
+                    s.cloud.len(),
+                    s.cloud.channels
+                ));
+            }
+            None => {
+                ui.label("nothing loaded");
+            }
+        }
+        ui.separator();
+        ui.heading("Camera");
+        let o = &mut self.orbit;
+        let mut yaw = o.yaw_rad.to_degrees();
+        let mut pitch = o.pitch_rad.to_degrees();
+        let mut fov = o.fov_y_rad.to_degrees();
+        ui.add(egui::Slider::new(&mut yaw, -180.0..=180.0).text("yaw °"));
+        ui.add(egui::Slider::new(&mut pitch, -88.0..=88.0).text("pitch °"));
+        ui.add(egui::Slider::new(&mut fov, 5.0..=120.0).text("fov y °"));
+        ui.add(
+            egui::Slider::new(&mut o.distance, 0.01..=100.0)
+                .logarithmic(true)
+                .text("distance"),
+        );
+        o.yaw_rad = yaw.to_radians();
+        o.pitch_rad = pitch.to_radians();
+        o.fov_y_rad = fov.to_radians();
+        if ui.button("Reset camera").clicked() {
+            self.reset_camera();
+        }
+        ui.separator();
+        ui.heading("Display");
+        let channels = self.scene.as_ref().map_or(3, |s| s.cloud.channels as u32);
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut self.display.mode, PresentMode::Rgb, "Features");
+            ui.selectable_value(&mut self.display.mode, PresentMode::Alpha, "Alpha");
+            ui.selectable_value(&mut self.display.mode, PresentMode::InverseDepth, "1/depth");
+        });
+        if self.display.mode == PresentMode::Rgb && channels > 3 {
+            ui.horizontal(|ui| {
+                ui.label("channels as RGB");
+                for c in &mut self.display.rgb_channels {
+                    ui.add(egui::DragValue::new(c).range(0..=channels - 1));
+                }
+            });
+        }
+        if self.display.mode == PresentMode::InverseDepth {
+            let r = &mut self.display.inv_depth_range;
+            ui.add(
+                egui::Slider::new(&mut r[1], 0.01..=10.0)
+                    .logarithmic(true)
+                    .text("1/depth max"),
+            );
+        }
+        ui.horizontal(|ui| {
+            ui.label("background");
+            ui.color_edit_button_rgb(&mut self.background);
+        });
+        ui.separator();
+        self.hud_ui(ui);
+    }
+
+    fn hud_ui(&self, ui: &mut egui::Ui) {
+        ui.heading("Frame");
+        let report = self.report();
+        egui::Grid::new("hud").num_columns(2).show(ui, |ui| {
+            let mut row = |k: &str, v: String| {
+                ui.label(k);
+                ui.monospace(v);
+                ui.end_row();
+            };
+            row("adapter", self.adapter.clone());
+            row("UI frame", format!("{:.1} ms", self.frame_ms));
+            row("splat renders", report.renders.to_string());
+            if let Some(s) = report.stats {
+                row("drawn", s.visible.to_string());
+                row("culled: near", s.near.to_string());
+                row("culled: off-screen", s.outside.to_string());
+                row("culled: transparent", s.transparent.to_string());
+                row("dropped: NaN/Inf", s.nonfinite.to_string());
+                row("degenerate", s.degenerate.to_string());
+                row("tile pairs", s.tile_pairs.to_string());
+            }
+        });
+    }
+
+    fn viewport_ui(&mut self, ui: &mut egui::Ui) {
+        let rect = ui.available_rect_before_wrap();
+        let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+        let Some(scene) = &self.scene else {
+            self.empty_state_ui(ui, rect);
+            return;
+        };
+        if !self.gpu_ready {
+            ui.painter().text(
+                rect.center(),
+                egui::Align2::CENTER_CENTER,
+                "No wgpu device: the viewer needs a Vulkan, Metal or DX12 adapter.",
+                egui::FontId::proportional(16.0),
+                ui.visuals().error_fg_color,
+            );
+            return;
+        }
+        if response.double_clicked() {
+            self.orbit = OrbitCamera::framing(&scene.cloud, self.orbit.fov_y_rad);
+        } else {
+            self.orbit.handle(&response, ui);
+        }
+        let ppp = ui.ctx().pixels_per_point();
+        let (w, h) = (
+            (rect.width() * ppp).round() as u32,
+            (rect.height() * ppp).round() as u32,
+        );
+        if w == 0 || h == 0 {
+            return;
+        }
+        let channels = scene.cloud.channels;
+        let mut background = vec![0.0; channels];
+        for (c, v) in background.iter_mut().zip(self.background) {
+            *c = v;
+        }
+        let callback = SplatCallback {
+            scene: SceneRef {
+                generation: scene.generation,
+                cloud: scene.cloud.clone(),
+            },
+            camera: self.orbit.camera(w, h),
+            background,
+            display: self.display.clone(),
+            report: self.report.clone(),
+        };
+        ui.painter()
+            .add(egui_wgpu::Callback::new_paint_callback(rect, callback));
+    }
+
+    fn empty_state_ui(&mut self, ui: &mut egui::Ui, rect: egui::Rect) {
+        let mut child = ui.new_child(
+            egui::UiBuilder::new()
+                .max_rect(rect)
+                .layout(egui::Layout::top_down(egui::Align::Center)),
+        );
+        child.add_space(rect.height() * 0.35);
+        child.heading("Nothing loaded");
+        child.label("Drop a 3DGS .ply file here, or use File ▸ Open…");
+        child.label("Photo → avatar reconstruction is not implemented yet.");
+        child.add_space(8.0);
+        if child.button("Open test scene").clicked() {
+            self.open_test_scene();
+        }
+    }
+
+    fn handle_dropped_files(&mut self, ctx: &egui::Context) {
+        let dropped: Vec<PathBuf> = ctx.input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .map(|f| f.path().to_path_buf())
+                .collect()
+        });
+        if let Some(path) = dropped.into_iter().next() {
+            self.open(path);
+        }
+    }
+
+    fn automation(&mut self, ctx: &egui::Context) {
+        self.frames += 1;
+        if self.frames == 3 {
+            // The real-window test waits for this line before taking its own screenshot.
+            println!("guava-viewer: ready");
+        }
+        let Some(n) = self.options.exit_after_frames else {
+            return;
+        };
+        ctx.request_repaint();
+        if self.frames == n {
+            match self.options.screenshot.clone() {
+                Some(path) => {
+                    let ctx2 = ctx.clone();
+                    ctx.request_screenshot(move |image| {
+                        if let Err(e) = save_color_image(&image, &path) {
+                            eprintln!("guava-viewer: screenshot {}: {e:#}", path.display());
+                        }
+                        ctx2.send_viewport_cmd(egui::ViewportCommand::Close);
+                    });
+                }
+                None => ctx.send_viewport_cmd(egui::ViewportCommand::Close),
+            }
+        }
+    }
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
+fn save_color_image(image: &egui::ColorImage, path: &Path) -> anyhow::Result<()> {
+    let [w, h] = image.size;
+    let rgba: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+    let img = image::RgbaImage::from_raw(w as u32, h as u32, rgba)
+        .ok_or_else(|| anyhow::anyhow!("bad screenshot size"))?;
+    let rgb = image::DynamicImage::ImageRgba8(img).to_rgb8();
+    guava::render::save_png(&rgb, path)
+}
+
+impl eframe::App for GuavaApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        let now = Instant::now();
+        if let Some(last) = self.last_frame {
+            self.frame_ms = 0.9 * self.frame_ms + 0.1 * (now - last).as_secs_f32() * 1e3;
+        }
+        self.last_frame = Some(now);
+        self.poll_loading();
+        self.handle_dropped_files(&ctx);
+
+        egui::Panel::top("menu").show(ui, |ui| self.menu_ui(ui));
+        egui::Panel::bottom("status").show(ui, |ui| {
+            ui.horizontal(|ui| {
+                if let Some(loading) = &self.loading {
+                    ui.spinner();
+                    ui.label(format!(
+                        "loading {} ({:.1} s)",
+                        loading.path.display(),
+                        loading.started.elapsed().as_secs_f32()
+                    ));
+                    if ui.button("Cancel").clicked() {
+                        self.loading = None;
+                        self.status = Some(("loading cancelled".into(), false));
+                    }
+                    ctx.request_repaint();
+                } else if let Some((text, is_error)) = &self.status {
+                    let color = if *is_error {
+                        ui.visuals().error_fg_color
+                    } else {
+                        ui.visuals().text_color()
+                    };
+                    ui.colored_label(color, text);
+                }
+            });
+        });
+        egui::Panel::left("scene").resizable(true).show(ui, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| self.side_panel_ui(ui));
+        });
+        egui::CentralPanel::default()
+            .frame(egui::Frame::NONE)
+            .show(ui, |ui| self.viewport_ui(ui));
+
+        let redraw = {
+            let mut report = self.report.lock().unwrap_or_else(|e| e.into_inner());
+            std::mem::take(&mut report.needs_redraw)
+        };
+        if redraw {
+            ctx.request_repaint();
+        }
+        self.automation(&ctx);
+    }
+}

@@ -1,0 +1,8 @@
+//! The guava-rs viewer: an eframe window whose central viewport is drawn by the splatting pass on
+//! egui's own wgpu device.
+
+pub mod app;
+pub mod orbit;
+pub mod viewport;
+
+pub use app::{GuavaApp, Options};
