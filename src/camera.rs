@@ -97,32 +97,6 @@ impl Camera {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn guava_camera_matches_reference_pixel_formula() {
-        // notes/guava-pipeline.md §2.3: x_pix = 6144·X/Z + 255.5 at 512².
-        let cam = Camera::guava(Mat4::IDENTITY, 512, GUAVA_INVTANFOV);
-        let (x, z) = (0.1_f32, 3.0_f32);
-        let x_pix = cam.fx * x / z + cam.cx - 0.5;
-        assert!((x_pix - (6144.0 * x / z + 255.5)).abs() < 1e-3);
-        let lim = cam.ewa_limits();
-        assert!(lim.iter().all(|l| (l - 1.3 / 24.0).abs() < 1e-6), "{lim:?}");
-    }
-
-    #[test]
-    fn look_at_puts_target_on_the_optical_axis() {
-        let view = Camera::look_at(Vec3::new(1.0, 2.0, 3.0), Vec3::ZERO, Vec3::Y);
-        let t = view.transform_point3(Vec3::ZERO);
-        assert!(t.x.abs() < 1e-5 && t.y.abs() < 1e-5 && t.z > 0.0, "{t}");
-        // World up is screen up, i.e. camera −y.
-        let up = view.transform_vector3(Vec3::Y);
-        assert!(up.y < 0.0, "{up}");
-    }
-}
-
 /// A view that frames `cloud` (its finite centres' bounding sphere) for a vertical field of view,
 /// orbiting its centre by `yaw` and `pitch` (radians) from the front (looking along +z, y down).
 pub fn orbit_view(
@@ -147,4 +121,30 @@ pub fn orbit(target: Vec3, distance: f32, yaw: f32, pitch: f32) -> Mat4 {
         yaw.cos() * pitch.cos(),
     );
     Camera::look_at(target - dir * distance, target, Vec3::NEG_Y)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn guava_camera_matches_reference_pixel_formula() {
+        // notes/guava-pipeline.md §2.3: x_pix = 6144·X/Z + 255.5 at 512².
+        let cam = Camera::guava(Mat4::IDENTITY, 512, GUAVA_INVTANFOV);
+        let (x, z) = (0.1_f32, 3.0_f32);
+        let x_pix = cam.fx * x / z + cam.cx - 0.5;
+        assert!((x_pix - (6144.0 * x / z + 255.5)).abs() < 1e-3);
+        let lim = cam.ewa_limits();
+        assert!(lim.iter().all(|l| (l - 1.3 / 24.0).abs() < 1e-6), "{lim:?}");
+    }
+
+    #[test]
+    fn look_at_puts_target_on_the_optical_axis() {
+        let view = Camera::look_at(Vec3::new(1.0, 2.0, 3.0), Vec3::ZERO, Vec3::Y);
+        let t = view.transform_point3(Vec3::ZERO);
+        assert!(t.x.abs() < 1e-5 && t.y.abs() < 1e-5 && t.z > 0.0, "{t}");
+        // World up is screen up, i.e. camera −y.
+        let up = view.transform_vector3(Vec3::Y);
+        assert!(up.y < 0.0, "{up}");
+    }
 }

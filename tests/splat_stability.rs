@@ -9,6 +9,7 @@ use guava::camera::{Camera, orbit};
 use guava::gaussians::GaussianCloud;
 use guava::gaussians::synthetic::BallCloud;
 use guava::render::reference;
+use std::f32::consts::FRAC_1_SQRT_2;
 
 const ID: [f32; 4] = [1.0, 0.0, 0.0, 0.0];
 
@@ -30,7 +31,7 @@ fn extreme_scales_and_needles_match_the_reference() {
     cloud.push([-0.3, 0.1, 0.0], ID, [0.5, 5e-7, 5e-7], 0.9, &c); // 1e6 anisotropy
     cloud.push(
         [0.0, -0.3, 0.2],
-        [0.7071, 0.7071, 0.0, 0.0],
+        [FRAC_1_SQRT_2, FRAC_1_SQRT_2, 0.0, 0.0],
         [1e-6, 1.0, 1e-6],
         0.9,
         &c,
@@ -211,4 +212,29 @@ fn stats_partition_the_input() {
     );
     let (_, cpu) = reference::render(&cloud, &camera, &[0.0; 3]);
     assert_eq!(stats, cpu);
+}
+
+#[test]
+fn reused_buffers_give_identical_frames() {
+    // Render a big cloud, then a smaller one into the same (larger) buffers, each several times:
+    // nothing from an earlier frame or cloud may leak into a later one.
+    let mut r = renderer();
+    let camera = front_camera(128);
+    let big = BallCloud::new(20_000, 3, 1).generate();
+    let small = BallCloud::new(3_000, 3, 2).generate();
+    let (first_big, stats_big) = r.render(&big, &camera, &[0.0; 3]).expect("fits");
+    for cloud in [&small, &big, &small] {
+        let (reference_image, reference_stats) = reference::render(cloud, &camera, &[0.0; 3]);
+        for _ in 0..3 {
+            let (image, stats) = r.render(cloud, &camera, &[0.0; 3]).expect("fits");
+            assert_eq!(stats, reference_stats);
+            assert!(common::diff(&image, &reference_image).max_abs < 1e-3);
+        }
+    }
+    let (again, stats_again) = r.render(&big, &camera, &[0.0; 3]).expect("fits");
+    assert_eq!(
+        (again, stats_again),
+        (first_big, stats_big),
+        "same input, same output, bit for bit"
+    );
 }

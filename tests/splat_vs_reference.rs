@@ -129,7 +129,7 @@ fn single_gaussian_matches_closed_form() {
     let hi_tile = (((32.0 + radius + 15.0) / 16.0).trunc() as usize * 16).min(65);
     for y in 0..65usize {
         for x in 0..65usize {
-            let r2 = ((x as f64 - 32.0).powi(2) + (y as f64 - 32.0).powi(2)) as f64;
+            let r2 = (x as f64 - 32.0).powi(2) + (y as f64 - 32.0).powi(2);
             let a = (o as f64 * (-0.5 * r2 / sigma2).exp()).min(0.99);
             let inside = (lo_tile..hi_tile).contains(&x) && (lo_tile..hi_tile).contains(&y);
             let expected = if inside && a >= 1.0 / 255.0 { a } else { 0.0 };

@@ -223,8 +223,8 @@ pub fn render(
     for (y0, out) in rows {
         for (k, px) in out.chunks_exact(ch + 2).enumerate() {
             let p = y0 * w + k;
-            for c in 0..ch {
-                image.features[c * w * h + p] = px[c] as f32;
+            for (c, v) in px[..ch].iter().enumerate() {
+                image.features[c * w * h + p] = *v as f32;
             }
             image.alpha[p] = px[ch] as f32;
             image.inv_depth[p] = px[ch + 1] as f32;

@@ -1,5 +1,7 @@
 //! Host side of shaders/scan.wgsl: an in-place exclusive prefix sum over the first `count` u32 of a
-//! buffer, whose grand total is written to `totals[total_index]`.
+//! buffer, whose grand total is written to `totals[total_index]`. Dispatches are sized for the
+//! buffer's capacity; [`PrefixScan::set_count`] sets the live count (the scan is in place, so
+//! entries past it hold last frame's sums and must never be read).
 
 use super::layout::ScanParams;
 use super::pipelines::{SplatPipelines, dispatch_1d};
@@ -9,6 +11,9 @@ pub const SCAN_BLOCK: u32 = 2048;
 
 pub(crate) struct PrefixScan {
     bind_group: wgpu::BindGroup,
+    params: wgpu::Buffer,
+    total_index: u32,
+    /// Blocks dispatched: enough for the capacity; blocks past the live count exit at once.
     num_blocks: u32,
 }
 
@@ -25,13 +30,8 @@ impl PrefixScan {
         let num_blocks = count.div_ceil(SCAN_BLOCK).max(1);
         let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(&format!("{label}::params")),
-            contents: bytemuck::bytes_of(&ScanParams {
-                count,
-                num_blocks,
-                total_index,
-                _pad: 0,
-            }),
-            usage: wgpu::BufferUsages::UNIFORM,
+            contents: bytemuck::bytes_of(&Self::params(count, total_index)),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
         let block_sums = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(&format!("{label}::block_sums")),
@@ -51,8 +51,29 @@ impl PrefixScan {
         });
         Self {
             bind_group,
+            params,
+            total_index,
             num_blocks,
         }
+    }
+
+    fn params(count: u32, total_index: u32) -> ScanParams {
+        ScanParams {
+            count,
+            num_blocks: count.div_ceil(SCAN_BLOCK).max(1),
+            total_index,
+            _pad: 0,
+        }
+    }
+
+    /// Scans only the first `count` entries from now on (at most the capacity given to `new`).
+    pub fn set_count(&self, queue: &wgpu::Queue, count: u32) {
+        let params = Self::params(count, self.total_index);
+        assert!(
+            params.num_blocks <= self.num_blocks,
+            "scan count {count} exceeds its capacity"
+        );
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
     }
 
     pub fn encode(&self, pipes: &SplatPipelines, pass: &mut wgpu::ComputePass<'_>) {

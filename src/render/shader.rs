@@ -10,8 +10,11 @@ pub const TILE_RANGES: &str = include_str!("../../shaders/tile_ranges.wgsl");
 pub const RASTERIZE: &str = include_str!("../../shaders/rasterize.wgsl");
 pub const PRESENT: &str = include_str!("../../shaders/present.wgsl");
 
+/// `const NAME: u32 = value` lines prepended to a pass.
+pub type Consts = &'static [(&'static str, u32)];
+
 /// Every pass with the constants it needs to compile (CHANNELS = 3 stands in for any count).
-pub const ALL: &[(&str, &str, &[(&str, u32)])] = &[
+pub const ALL: &[(&str, &str, Consts)] = &[
     ("preprocess", PREPROCESS, &[]),
     ("scan", SCAN, &[]),
     ("radix_sort", RADIX_SORT, &[]),

@@ -132,3 +132,123 @@ impl RadixSort {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gaussians::synthetic::Rng;
+    use crate::gpu::GpuContext;
+    use crate::render::readback::read_buffers;
+
+    fn buffer(device: &wgpu::Device, data: &[u32]) -> wgpu::Buffer {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("test"),
+            contents: bytemuck::cast_slice(if data.is_empty() { &[0u32] } else { data }),
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+        })
+    }
+
+    /// Sorts on the GPU with `capacity` ≥ keys.len() (the live count is keys.len()).
+    fn gpu_sort(
+        gpu: &GpuContext,
+        keys: &[u32],
+        capacity: u32,
+        key_bits: u32,
+    ) -> (Vec<u32>, Vec<u32>) {
+        let (device, queue) = (&gpu.device, &gpu.queue);
+        let pipes = SplatPipelines::new(device);
+        let mut padded = keys.to_vec();
+        padded.resize(capacity as usize, 0xdead_beef);
+        let vals: Vec<u32> = (0..capacity).collect();
+        let count = buffer(device, &[keys.len() as u32]);
+        let (ka, va) = (buffer(device, &padded), buffer(device, &vals));
+        let (kb, vb) = (buffer(device, &padded), buffer(device, &vals));
+        let sort = RadixSort::new(
+            device,
+            &pipes,
+            "test",
+            SortBuffers {
+                count: &count,
+                count_index: 0,
+                keys_a: &ka,
+                vals_a: &va,
+                keys_b: &kb,
+                vals_b: &vb,
+            },
+            capacity,
+            key_bits,
+        );
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            sort.encode(&pipes, &mut pass);
+        }
+        queue.submit([encoder.finish()]);
+        let n = keys.len() as u64 * 4;
+        if n == 0 {
+            return (Vec::new(), Vec::new());
+        }
+        let out = read_buffers(device, queue, &[(&ka, n), (&va, n)]);
+        (
+            bytemuck::cast_slice(&out[0]).to_vec(),
+            bytemuck::cast_slice(&out[1]).to_vec(),
+        )
+    }
+
+    fn check(gpu: &GpuContext, keys: Vec<u32>, capacity: u32, key_bits: u32) {
+        let mut expected: Vec<(u32, u32)> = keys.iter().copied().zip(0..).collect();
+        expected.sort_by_key(|(k, _)| *k); // stable: equal keys keep index order
+        let (k, v) = gpu_sort(gpu, &keys, capacity, key_bits);
+        let got: Vec<(u32, u32)> = k.into_iter().zip(v).collect();
+        assert_eq!(got.len(), expected.len());
+        if let Some(i) = (0..got.len()).find(|&i| got[i] != expected[i]) {
+            panic!(
+                "n={} first mismatch at {i}: {:?} vs {:?}",
+                keys.len(),
+                got[i],
+                expected[i]
+            );
+        }
+    }
+
+    #[test]
+    fn sorts_stably_against_a_cpu_sort() {
+        let gpu = GpuContext::headless().expect("adapter");
+        let mut rng = Rng::new(5);
+        check(&gpu, vec![], 16, 32);
+        check(&gpu, vec![7], 16, 32);
+        for n in [2047usize, 2048, 2049, 100_000] {
+            // Few distinct keys: stability is what is being checked.
+            let keys: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 37) as u32).collect();
+            check(&gpu, keys, n as u32 + 1000, 8);
+            let keys: Vec<u32> = (0..n).map(|_| rng.next_u64() as u32).collect();
+            check(&gpu, keys, n as u32, 32);
+        }
+        // Depth-like keys (bits of positive floats) at a realistic size, with idle capacity.
+        let keys: Vec<u32> = (0..300_000)
+            .map(|_| rng.range(0.2, 50.0).to_bits())
+            .collect();
+        check(&gpu, keys, 1 << 20, 32);
+    }
+
+    #[test]
+    fn sorts_four_million_keys() {
+        // Large enough for >1000 blocks per pass and a multi-block histogram scan.
+        let gpu = GpuContext::headless().expect("adapter");
+        let mut rng = Rng::new(9);
+        let keys: Vec<u32> = (0..4_000_000)
+            .map(|_| (rng.next_u64() % 65_536) as u32)
+            .collect();
+        check(&gpu, keys, 4_000_000, 16);
+    }
+
+    #[test]
+    fn pass_count_is_even() {
+        assert_eq!(pass_count(32), 8);
+        assert_eq!(pass_count(10), 4);
+        assert_eq!(pass_count(1), 2);
+        assert_eq!(pass_count(0), 2);
+    }
+}

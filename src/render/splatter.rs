@@ -314,7 +314,10 @@ impl Splatter {
             self.bindings = Some(self.bind(device, camera));
         }
         let (tiles_x, tiles_y) = camera.tiles();
-        let Some(view) = &self.view else { return };
+        let (Some(view), Some(bindings)) = (&self.view, &self.bindings) else {
+            return;
+        };
+        bindings.pair_scan.set_count(queue, self.num_gaussians);
         let frame = FrameUniform {
             view_from_world: camera.view_from_world.to_cols_array_2d(),
             focal: [camera.fx, camera.fy],

@@ -7,6 +7,7 @@ use crate::viewport::{
 };
 use guava::gaussians::GaussianCloud;
 use guava::render::present::PresentMode;
+use guava::render::splatter::max_gaussians;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::sync::{Arc, Mutex};
@@ -49,19 +50,24 @@ pub struct GuavaApp {
     frames: u64,
     gpu_ready: bool,
     adapter: String,
+    limits: wgpu::Limits,
     last_frame: Option<Instant>,
     frame_ms: f32,
 }
 
 impl GuavaApp {
     pub fn new(cc: &eframe::CreationContext<'_>, options: Options) -> Self {
-        let (gpu_ready, adapter) = match cc.wgpu_render_state.as_ref() {
+        let (gpu_ready, adapter, limits) = match cc.wgpu_render_state.as_ref() {
             Some(rs) => {
                 let resources = ViewportResources::new(&rs.device, rs.target_format);
                 rs.renderer.write().callback_resources.insert(resources);
-                (true, guava::gpu::adapter_label(&rs.adapter.get_info()))
+                (
+                    true,
+                    guava::gpu::adapter_label(&rs.adapter.get_info()),
+                    rs.device.limits(),
+                )
             }
-            None => (false, "no wgpu device".into()),
+            None => (false, "no wgpu device".into(), wgpu::Limits::default()),
         };
         let mut app = Self {
             options: options.clone(),
@@ -76,6 +82,7 @@ impl GuavaApp {
             frames: 0,
             gpu_ready,
             adapter,
+            limits,
             last_frame: None,
             frame_ms: 0.0,
         };
@@ -94,6 +101,11 @@ impl GuavaApp {
 
     pub fn status(&self) -> Option<&str> {
         self.status.as_ref().map(|(s, _)| s.as_str())
+    }
+
+    /// Turns the orbit camera (what dragging or the yaw slider does).
+    pub fn set_yaw_deg(&mut self, yaw: f32) {
+        self.orbit.yaw_rad = yaw.to_radians();
     }
 
     pub fn report(&self) -> ViewportReport {
@@ -140,7 +152,7 @@ impl GuavaApp {
             Some("ply") => {}
             Some("png" | "jpg" | "jpeg") => {
                 self.error(format!(
-                    "{}: photo → avatar reconstruction is not implemented yet (see README, \"Missing\")",
+                    "{}: photo-to-avatar reconstruction is not implemented yet (see README, \"Missing\")",
                     path.display()
                 ));
                 return;
@@ -185,13 +197,27 @@ impl GuavaApp {
                 let path = loading.path.clone();
                 self.loading = None;
                 match result {
-                    Ok(cloud) if cloud.is_empty() => {
-                        self.error(format!("{}: the file has no Gaussians", path.display()))
-                    }
-                    Ok(cloud) => self.set_scene(file_name(&path), "3DGS PLY file", cloud),
+                    Ok(cloud) => self.accept_loaded(&path, cloud),
                     Err(e) => self.error(e),
                 }
             }
+        }
+    }
+
+    /// Shows a loaded cloud, unless it is empty or too big for the GPU: then the current scene stays.
+    fn accept_loaded(&mut self, path: &Path, cloud: GaussianCloud) {
+        let max = max_gaussians(&self.limits, cloud.channels as u32);
+        if cloud.is_empty() {
+            self.error(format!("{}: the file has no Gaussians", path.display()));
+        } else if cloud.len() as u64 > max {
+            self.error(format!(
+                "{}: {} Gaussians with {} channels exceed what this GPU can hold ({max}); the current scene is kept",
+                path.display(),
+                cloud.len(),
+                cloud.channels
+            ));
+        } else {
+            self.set_scene(file_name(path), "3DGS PLY file", cloud);
         }
     }
 
@@ -323,25 +349,28 @@ impl GuavaApp {
     fn hud_ui(&self, ui: &mut egui::Ui) {
         ui.heading("Frame");
         let report = self.report();
-        egui::Grid::new("hud").num_columns(2).show(ui, |ui| {
-            let mut row = |k: &str, v: String| {
-                ui.label(k);
-                ui.monospace(v);
-                ui.end_row();
-            };
-            row("adapter", self.adapter.clone());
-            row("UI frame", format!("{:.1} ms", self.frame_ms));
-            row("splat renders", report.renders.to_string());
-            if let Some(s) = report.stats {
-                row("drawn", s.visible.to_string());
-                row("culled: near", s.near.to_string());
-                row("culled: off-screen", s.outside.to_string());
-                row("culled: transparent", s.transparent.to_string());
-                row("dropped: NaN/Inf", s.nonfinite.to_string());
-                row("degenerate", s.degenerate.to_string());
-                row("tile pairs", s.tile_pairs.to_string());
-            }
-        });
+        egui::Grid::new("hud")
+            .num_columns(2)
+            .min_col_width(120.0)
+            .show(ui, |ui| {
+                let mut row = |k: &str, v: String| {
+                    ui.label(k);
+                    ui.monospace(v);
+                    ui.end_row();
+                };
+                row("adapter", self.adapter.clone());
+                row("UI frame", format!("{:.1} ms", self.frame_ms));
+                row("splat renders", report.renders.to_string());
+                if let Some(s) = report.stats {
+                    row("drawn", s.visible.to_string());
+                    row("culled: near", s.near.to_string());
+                    row("culled: off-screen", s.outside.to_string());
+                    row("culled: transparent", s.transparent.to_string());
+                    row("dropped: NaN/Inf", s.nonfinite.to_string());
+                    row("degenerate", s.degenerate.to_string());
+                    row("tile pairs", s.tile_pairs.to_string());
+                }
+            });
     }
 
     fn viewport_ui(&mut self, ui: &mut egui::Ui) {
@@ -401,8 +430,8 @@ impl GuavaApp {
         );
         child.add_space(rect.height() * 0.35);
         child.heading("Nothing loaded");
-        child.label("Drop a 3DGS .ply file here, or use File ▸ Open…");
-        child.label("Photo → avatar reconstruction is not implemented yet.");
+        child.label("Drop a 3DGS .ply file here, or use File > Open…");
+        child.label("Photo-to-avatar reconstruction is not implemented yet.");
         child.add_space(8.0);
         if child.button("Open test scene").clicked() {
             self.open_test_scene();
@@ -508,10 +537,16 @@ impl eframe::App for GuavaApp {
             .frame(egui::Frame::NONE)
             .show(ui, |ui| self.viewport_ui(ui));
 
-        let redraw = {
+        let (redraw, gpu_error) = {
             let mut report = self.report.lock().unwrap_or_else(|e| e.into_inner());
-            std::mem::take(&mut report.needs_redraw)
+            (
+                std::mem::take(&mut report.needs_redraw),
+                report.error.take(),
+            )
         };
+        if let Some(e) = gpu_error {
+            self.error(e);
+        }
         if redraw {
             ctx.request_repaint();
         }

@@ -1,0 +1,151 @@
+//! 3DGS PLY in and out: round trips, files written the way the original 3DGS code writes them,
+//! and malformed files.
+
+use guava::gaussians::ply::{self, SH_C0};
+use guava::gaussians::synthetic::BallCloud;
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("guava-ply-{}-{name}", std::process::id()))
+}
+
+#[test]
+fn round_trip_keeps_every_attribute() {
+    for channels in [3, 32] {
+        let mut cloud = BallCloud::new(500, channels, 11).generate();
+        for q in &mut cloud.rotations {
+            // Reading normalises quaternions (as 3DGS does); the generator already makes unit ones.
+            let n = q.iter().map(|c| c * c).sum::<f32>().sqrt();
+            q.iter_mut().for_each(|c| *c /= n);
+        }
+        let path = temp(&format!("rt{channels}.ply"));
+        ply::write(&path, &cloud).expect("write");
+        let back = ply::read(&path).expect("read");
+        std::fs::remove_file(&path).ok();
+        assert_eq!((back.len(), back.channels), (cloud.len(), channels));
+        let close = |a: f32, b: f32, tol: f32| (a - b).abs() <= tol * b.abs().max(1.0);
+        for i in 0..cloud.len() {
+            assert_eq!(back.positions[i], cloud.positions[i]);
+            for k in 0..3 {
+                assert!(close(back.scales[i][k], cloud.scales[i][k], 1e-5));
+            }
+            for k in 0..4 {
+                assert!(close(back.rotations[i][k], cloud.rotations[i][k], 1e-6));
+            }
+            assert!(close(back.opacities[i], cloud.opacities[i], 1e-5));
+            for (a, b) in back.features_of(i).iter().zip(cloud.features_of(i)) {
+                assert!(close(*a, *b, 1e-5), "{a} vs {b}");
+            }
+        }
+    }
+}
+
+/// A file laid out like the original 3DGS `save_ply`: normals, 45 f_rest, logit opacity.
+#[test]
+fn reads_a_3dgs_style_file() {
+    let mut header = String::from("ply\nformat binary_little_endian 1.0\nelement vertex 2\n");
+    let mut names = vec![
+        "x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2",
+    ]
+    .into_iter()
+    .map(String::from)
+    .collect::<Vec<_>>();
+    names.extend((0..45).map(|i| format!("f_rest_{i}")));
+    names.extend(
+        [
+            "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3",
+        ]
+        .map(String::from),
+    );
+    for n in &names {
+        header.push_str(&format!("property float {n}\n"));
+    }
+    header.push_str("end_header\n");
+    let mut bytes = header.into_bytes();
+    for v in 0..2 {
+        let mut row = vec![0f32; names.len()];
+        row[0] = v as f32;
+        row[6] = 1.0; // f_dc_0
+        row[54] = 0.0; // opacity logit → 0.5
+        row[55] = (0.1f32).ln();
+        row[56] = (0.2f32).ln();
+        row[57] = (0.3f32).ln();
+        row[58] = 2.0; // unnormalised quaternion (2, 0, 0, 0) → identity
+        bytes.extend(row.iter().flat_map(|f| f.to_le_bytes()));
+    }
+    let cloud = ply::read_from(Cursor::new(bytes), Path::new("scene.ply")).expect("valid file");
+    assert_eq!((cloud.len(), cloud.channels), (2, 3));
+    assert_eq!(cloud.positions[1], [1.0, 0.0, 0.0]);
+    assert!((cloud.features_of(0)[0] - (0.5 + SH_C0)).abs() < 1e-6);
+    assert!((cloud.opacities[0] - 0.5).abs() < 1e-6);
+    assert!((cloud.scales[0][2] - 0.3).abs() < 1e-6);
+    assert_eq!(cloud.rotations[0], [1.0, 0.0, 0.0, 0.0]);
+}
+
+#[test]
+fn ascii_files_read_too() {
+    let text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n\
+        property float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\nproperty float opacity\n\
+        property float scale_0\nproperty float scale_1\nproperty float scale_2\nproperty float rot_0\n\
+        property float rot_1\nproperty float rot_2\nproperty float rot_3\nend_header\n\
+        1 2 3 0 0 0 0 0 0 0 1 0 0 0\n";
+    let cloud = ply::read_from(Cursor::new(text), Path::new("a.ply")).expect("ascii");
+    assert_eq!(cloud.positions[0], [1.0, 2.0, 3.0]);
+    assert_eq!(cloud.features_of(0), [0.5, 0.5, 0.5]);
+}
+
+#[test]
+fn malformed_files_name_the_file_and_the_problem() {
+    let cases: &[(&str, &[u8], &str)] = &[
+        ("empty.ply", b"", "header ends"),
+        ("notply.ply", b"hello\n", "not a PLY file"),
+        ("noformat.ply", b"ply\nelement vertex 1\nproperty float x\nend_header\n", "format"),
+        (
+            "missing.ply",
+            b"ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nend_header\n",
+            "`y` is missing",
+        ),
+        ("badcount.ply", b"ply\nformat ascii 1.0\nelement vertex lots\nend_header\n", "not a number"),
+    ];
+    for (name, bytes, expect) in cases {
+        let err = ply::read_from(Cursor::new(bytes.to_vec()), Path::new(name))
+            .expect_err(name)
+            .to_string();
+        assert!(err.contains(name) && err.contains(expect), "{name}: {err}");
+    }
+    // Truncated binary data.
+    let path = temp("trunc.ply");
+    let cloud = BallCloud::new(10, 3, 1).generate();
+    ply::write(&path, &cloud).expect("write");
+    let bytes = std::fs::read(&path).expect("read back");
+    std::fs::write(&path, &bytes[..bytes.len() - 7]).expect("truncate");
+    let err = ply::read(&path).expect_err("truncated").to_string();
+    std::fs::remove_file(&path).ok();
+    assert!(
+        err.contains("truncated") && err.contains("vertex 9"),
+        "{err}"
+    );
+    // A missing file.
+    let err = ply::read(Path::new("/nonexistent/x.ply"))
+        .expect_err("missing")
+        .to_string();
+    assert!(err.contains("/nonexistent/x.ply"), "{err}");
+}
+
+#[test]
+fn writing_never_leaves_a_partial_file() {
+    let path = temp("atomic.ply");
+    let cloud = BallCloud::new(100, 3, 2).generate();
+    ply::write(&path, &cloud).expect("write");
+    assert!(
+        !path.with_extension("ply.tmp").exists(),
+        "the temporary file is renamed away"
+    );
+    let first = std::fs::read(&path).expect("read");
+    // A failing write (into a directory that does not exist) leaves nothing behind.
+    assert!(ply::write(Path::new("/nonexistent/dir/x.ply"), &cloud).is_err());
+    ply::write(&path, &cloud).expect("overwrite");
+    assert_eq!(std::fs::read(&path).expect("read"), first);
+    std::fs::remove_file(&path).ok();
+}

@@ -1,0 +1,113 @@
+//! Every WGSL pass parses and validates with naga (so a broken shader fails even if no test runs
+//! it), and the WGSL struct layouts equal their Rust mirrors.
+
+use guava::render::layout::{FrameUniform, GpuGaussian, PROJECTED_SIZE, ScanParams, SortPass};
+use guava::render::present::PresentUniform;
+use guava::render::shader;
+use wgpu::naga;
+
+fn module(name: &str) -> naga::Module {
+    let (_, src, consts) = shader::ALL.iter().find(|(n, _, _)| *n == name).expect(name);
+    let module = naga::front::wgsl::parse_str(&shader::compose(src, consts))
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{name}: {e:?}"));
+    module
+}
+
+#[test]
+fn every_pass_validates() {
+    for (name, _, _) in shader::ALL {
+        module(name);
+    }
+    // The rasterizer at the channel counts we use and the bounds we support.
+    for c in [1, 3, 32, 64] {
+        let src = shader::compose(shader::RASTERIZE, &[("CHANNELS", c)]);
+        naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("rasterize C={c}: {e}"));
+    }
+}
+
+/// (size, member offsets) of a struct in a WGSL module.
+fn layout(module: &naga::Module, name: &str) -> (u32, Vec<u32>) {
+    let ty = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("struct {name} not found"))
+        .1;
+    match &ty.inner {
+        naga::TypeInner::Struct { members, span } => {
+            (*span, members.iter().map(|m| m.offset).collect())
+        }
+        other => panic!("{name} is not a struct: {other:?}"),
+    }
+}
+
+macro_rules! offsets {
+    ($t:ty, $($f:ident),+) => { vec![$(std::mem::offset_of!($t, $f) as u32),+] };
+}
+
+#[test]
+fn wgsl_layouts_match_rust() {
+    let pre = module("preprocess");
+    assert_eq!(
+        layout(&pre, "Frame"),
+        (
+            size_of::<FrameUniform>() as u32,
+            offsets!(
+                FrameUniform,
+                view_from_world,
+                focal,
+                principal,
+                ewa_lim,
+                size,
+                tiles,
+                near,
+                num_gaussians,
+                pair_capacity,
+                channels
+            )
+        )
+    );
+    assert_eq!(
+        layout(&pre, "Gaussian"),
+        (
+            size_of::<GpuGaussian>() as u32,
+            offsets!(GpuGaussian, pos, opacity, rot, scale, _pad)
+        )
+    );
+    assert_eq!(layout(&pre, "Projected").0 as u64, PROJECTED_SIZE);
+    assert_eq!(
+        layout(&module("scan"), "ScanParams"),
+        (
+            size_of::<ScanParams>() as u32,
+            offsets!(ScanParams, count, num_blocks, total_index, _pad)
+        )
+    );
+    assert_eq!(
+        layout(&module("radix_sort"), "SortPass"),
+        (
+            size_of::<SortPass>() as u32,
+            offsets!(SortPass, shift, num_blocks, count_index, _pad)
+        )
+    );
+    assert_eq!(
+        layout(&module("present"), "Present"),
+        (
+            size_of::<PresentUniform>() as u32,
+            offsets!(
+                PresentUniform,
+                size,
+                mode,
+                srgb_target,
+                rgb_channels,
+                inv_depth_range,
+                _pad
+            )
+        )
+    );
+}

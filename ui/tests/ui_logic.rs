@@ -1,0 +1,110 @@
+//! UI logic on egui_kittest: the real eframe app on a real wgpu device (lavapipe in CI), no window.
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use guava_ui::{GuavaApp, Options};
+use std::time::{Duration, Instant};
+
+/// One frame through the whole pipeline: UI logic, then a real render (paint callbacks included).
+fn frame(h: &mut Harness<'static, GuavaApp>) {
+    h.step();
+    h.render().expect("frame renders");
+}
+
+fn harness(options: Options) -> Harness<'static, GuavaApp> {
+    Harness::builder()
+        .with_size(egui::vec2(1100.0, 700.0))
+        .wgpu()
+        .build_eframe(move |cc| GuavaApp::new(cc, options))
+}
+
+#[test]
+fn empty_state_says_what_to_open_and_the_test_scene_renders() {
+    let mut h = harness(Options::default());
+    h.run();
+    h.get_by_label("Nothing loaded");
+    h.get_by_label("Drop a 3DGS .ply file here, or use File > Open…");
+    assert_eq!(h.state().scene_len(), None);
+    h.get_by_label("Open test scene").click();
+    h.run();
+    assert_eq!(h.state().scene_len(), Some(40_000));
+    // The splatting pass ran on egui's device and its stats came back to the HUD.
+    let start = Instant::now();
+    while h.state().report().stats.is_none() && start.elapsed() < Duration::from_secs(30) {
+        frame(&mut h);
+    }
+    let report = h.state().report();
+    let stats = report.stats.expect("stats reach the HUD");
+    assert_eq!(stats.visible, 40_000, "{stats:?}");
+    assert!(report.renders >= 1);
+}
+
+#[test]
+fn nothing_changes_nothing_renders() {
+    let mut h = harness(Options {
+        test_scene: true,
+        ..Default::default()
+    });
+    for _ in 0..10 {
+        frame(&mut h);
+    }
+    let before = h.state().report().renders;
+    assert!(before >= 1, "the scene was rendered at least once");
+    for _ in 0..10 {
+        frame(&mut h);
+    }
+    assert_eq!(
+        h.state().report().renders,
+        before,
+        "an unchanged view must not re-run the splatting pass"
+    );
+    // Moving the camera does re-run it.
+    let orbit = h.state().report().renders;
+    h.state_mut().set_yaw_deg(30.0);
+    frame(&mut h);
+    assert_eq!(
+        h.state().report().renders,
+        orbit + 1,
+        "a camera change renders once"
+    );
+}
+
+#[test]
+fn bad_files_are_reported_and_the_scene_is_kept() {
+    let mut h = harness(Options {
+        test_scene: true,
+        ..Default::default()
+    });
+    h.run();
+    let dir = std::env::temp_dir().join(format!("guava-ui-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let bad = dir.join("broken.ply");
+    std::fs::write(
+        &bad,
+        "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n",
+    )
+    .expect("write");
+    h.state_mut().open(bad.clone());
+    let start = Instant::now();
+    while h.state().status().is_none_or(|s| !s.contains("broken.ply"))
+        && start.elapsed() < Duration::from_secs(10)
+    {
+        h.step();
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let status = h.state().status().unwrap_or_default().to_string();
+    assert!(
+        status.contains("broken.ply") && status.contains("`y` is missing"),
+        "{status}"
+    );
+    assert_eq!(
+        h.state().scene_len(),
+        Some(40_000),
+        "the previous scene stays"
+    );
+
+    h.state_mut().open(dir.join("photo.png"));
+    let status = h.state().status().unwrap_or_default().to_string();
+    assert!(status.contains("not implemented yet"), "{status}");
+    std::fs::remove_dir_all(&dir).ok();
+}

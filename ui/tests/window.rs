@@ -1,0 +1,176 @@
+//! The real window: start `guava-viewer` on a virtual X server (Xvfb), wait until it has drawn,
+//! take a screenshot of the X screen with ImageMagick's `import`, check it shows the app, and check
+//! the viewer exits cleanly on its own. Needs `xvfb` and `imagemagick` (tools/setup.sh installs them).
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+struct Xvfb {
+    child: Child,
+    display: String,
+}
+
+impl Xvfb {
+    fn start() -> Self {
+        // A display number unlikely to clash with a developer's own or a parallel test run.
+        let n = 90 + std::process::id() % 100;
+        let display = format!(":{n}");
+        let child = Command::new("Xvfb")
+            .args([
+                display.as_str(),
+                "-screen",
+                "0",
+                "1280x800x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("Xvfb not found: install it with `bash tools/setup.sh` (Debian package xvfb)");
+        let lock = PathBuf::from(format!("/tmp/.X{n}-lock"));
+        let start = Instant::now();
+        while !lock.exists() && start.elapsed() < Duration::from_secs(10) {
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        std::thread::sleep(Duration::from_millis(300));
+        Self { child, display }
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn runtime_dir() -> PathBuf {
+    let dir = std::env::temp_dir().join("guava-xdg-runtime");
+    std::fs::create_dir_all(&dir).expect("runtime dir");
+    dir
+}
+
+/// Fraction of pixels in a region that are far from black, and how many distinct colours it has.
+fn region_stats(img: &image::RgbImage, x0: u32, y0: u32, x1: u32, y1: u32) -> (f64, usize) {
+    let mut lit = 0u64;
+    let mut colours = std::collections::HashSet::new();
+    for y in y0..y1 {
+        for x in x0..x1 {
+            let p = img.get_pixel(x, y).0;
+            if p.iter().map(|&c| c as u32).sum::<u32>() > 90 {
+                lit += 1;
+            }
+            colours.insert([p[0] >> 4, p[1] >> 4, p[2] >> 4]);
+        }
+    }
+    (lit as f64 / ((x1 - x0) * (y1 - y0)) as f64, colours.len())
+}
+
+#[test]
+fn the_viewer_window_shows_the_scene_and_exits_cleanly() {
+    let xvfb = Xvfb::start();
+    let dir = std::env::temp_dir().join(format!("guava-window-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let self_shot = dir.join("frame.png");
+    let x_shot = dir.join("screen.png");
+    let mut viewer = Command::new(env!("CARGO_BIN_EXE_guava-viewer"))
+        .args(["--test-scene", "--exit-after-frames", "40", "--screenshot"])
+        .arg(&self_shot)
+        .env("DISPLAY", &xvfb.display)
+        .env("XDG_RUNTIME_DIR", runtime_dir())
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("guava-viewer starts");
+    let stdout = BufReader::new(viewer.stdout.take().expect("stdout"));
+    let mut ready = false;
+    for line in stdout.lines().map_while(Result::ok) {
+        if line.contains("guava-viewer: ready") {
+            ready = true;
+            break;
+        }
+    }
+    assert!(ready, "the viewer never reported its first frames");
+    // Give the splatting pass a few frames, then photograph the X screen itself.
+    std::thread::sleep(Duration::from_secs(2));
+    let status = Command::new("import")
+        .args(["-display", &xvfb.display, "-window", "root"])
+        .arg(&x_shot)
+        .status()
+        .expect("ImageMagick `import` (bash tools/setup.sh installs imagemagick)");
+    assert!(status.success(), "import failed");
+
+    let start = Instant::now();
+    let exit = loop {
+        if let Some(status) = viewer.try_wait().expect("wait") {
+            break status;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(180),
+            "the viewer did not exit by itself"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut viewer.stderr.take().expect("stderr"), &mut stderr).ok();
+    assert!(
+        exit.success(),
+        "viewer exit status {exit}; stderr:\n{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+
+    check_screenshot(&x_shot);
+    check_screenshot(&self_shot);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The window fills the 1280×800 screen: a UI panel on the left, the splatted scene on the right.
+fn check_screenshot(path: &Path) {
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb8();
+    let (w, h) = img.dimensions();
+    assert!(w >= 1000 && h >= 700, "{}: {w}×{h}", path.display());
+    let (panel_lit, panel_colours) = region_stats(&img, 0, 30, 380, h - 40);
+    let (view_lit, view_colours) = region_stats(&img, 600, 150, w - 60, h - 150);
+    println!(
+        "{}: panel lit {panel_lit:.3} ({panel_colours} colours), viewport lit {view_lit:.3} ({view_colours} colours)",
+        path.display()
+    );
+    assert!(
+        panel_lit > 0.01 && panel_colours > 4,
+        "{}: the side panel has no UI",
+        path.display()
+    );
+    // The torus knot covers a good part of the viewport in many hues.
+    assert!(
+        view_lit > 0.1,
+        "{}: the viewport is (nearly) black",
+        path.display()
+    );
+    assert!(
+        view_colours > 50,
+        "{}: the viewport has too few colours to be the scene",
+        path.display()
+    );
+}
+
+#[test]
+fn without_a_display_it_says_what_is_missing() {
+    let out = Command::new(env!("CARGO_BIN_EXE_guava-viewer"))
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("guava-viewer runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("no display") && stderr.contains("xvfb-run"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
