@@ -24,10 +24,19 @@ fn every_pass_validates() {
     for (name, _, _) in shader::ALL {
         module(name);
     }
-    // The rasterizer at the channel counts we use and the bounds we support.
+    // The rasterizer at the channel counts and thread layouts we use and the bounds we support.
     for c in [1, 3, 32, 64] {
-        let src = shader::compose(shader::RASTERIZE, &[("CHANNELS", c)]);
-        naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("rasterize C={c}: {e}"));
+        for p in [1, 2, 4, 8, 16] {
+            let src = shader::compose(shader::RASTERIZE, &[("CHANNELS", c), ("PIXELS", p)]);
+            let module = naga::front::wgsl::parse_str(&src)
+                .unwrap_or_else(|e| panic!("rasterize C={c} P={p}: {e}"));
+            naga::valid::Validator::new(
+                naga::valid::ValidationFlags::all(),
+                naga::valid::Capabilities::all(),
+            )
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("rasterize C={c} P={p}: {e:?}"));
+        }
     }
 }
 

@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{assert_all_finite, diff, renderer};
+use common::{assert_all_finite, diff, renderers};
 use glam::{Mat4, Vec3};
 use guava::camera::{Camera, GUAVA_INVTANFOV, orbit};
 use guava::gaussians::GaussianCloud;
@@ -17,36 +17,38 @@ use guava::gaussians::synthetic::BallCloud;
 use guava::render::reference;
 
 fn check(name: &str, cloud: &GaussianCloud, camera: &Camera, background: &[f32]) {
-    let mut r = renderer();
-    let (gpu, gpu_stats) = r.render(cloud, camera, background).expect("cloud fits");
     let (cpu, cpu_stats) = reference::render(cloud, camera, background);
-    assert_all_finite(&gpu, name);
-    let d = diff(&gpu, &cpu);
-    println!("{name}: {d:?}; stats {gpu_stats:?}");
-    assert_eq!(
-        gpu_stats, cpu_stats,
-        "{name}: culling and tile-pair counts must match the reference"
-    );
     assert!(
         cpu_stats.visible > 0,
         "{name}: the scene must draw something"
     );
-    assert!(d.psnr_db >= 60.0, "{name}: PSNR {} dB < 60", d.psnr_db);
-    assert!(
-        d.max_abs <= 1e-3,
-        "{name}: max abs error {} > 1e-3",
-        d.max_abs
-    );
-    assert!(
-        d.max_abs_alpha <= 1e-3,
-        "{name}: alpha error {}",
-        d.max_abs_alpha
-    );
-    assert!(
-        d.max_rel_inv_depth <= 1e-3,
-        "{name}: inverse depth error {}",
-        d.max_rel_inv_depth
-    );
+    for mut r in renderers() {
+        let name = format!("{name} [{:?}]", r.pipelines.tuning);
+        let (gpu, gpu_stats) = r.render(cloud, camera, background).expect("cloud fits");
+        assert_all_finite(&gpu, &name);
+        let d = diff(&gpu, &cpu);
+        println!("{name}: {d:?}; stats {gpu_stats:?}");
+        assert_eq!(
+            gpu_stats, cpu_stats,
+            "{name}: culling and tile-pair counts must match the reference"
+        );
+        assert!(d.psnr_db >= 60.0, "{name}: PSNR {} dB < 60", d.psnr_db);
+        assert!(
+            d.max_abs <= 1e-3,
+            "{name}: max abs error {} > 1e-3",
+            d.max_abs
+        );
+        assert!(
+            d.max_abs_alpha <= 1e-3,
+            "{name}: alpha error {}",
+            d.max_abs_alpha
+        );
+        assert!(
+            d.max_rel_inv_depth <= 1e-3,
+            "{name}: inverse depth error {}",
+            d.max_rel_inv_depth
+        );
+    }
 }
 
 #[test]
@@ -122,37 +124,38 @@ fn single_gaussian_matches_closed_form() {
     camera.fy = f;
     let sigma2 = ((f * s / z) as f64).powi(2) + 0.3;
     let radius = (3.0 * sigma2.sqrt()).ceil();
-    let mut r = renderer();
-    let (gpu, _) = r.render(&cloud, &camera, &[0.0; 3]).expect("fits");
     let (cpu, _) = reference::render(&cloud, &camera, &[0.0; 3]);
-    let lo_tile = ((32.0 - radius) / 16.0).trunc().max(0.0) as usize * 16;
-    let hi_tile = (((32.0 + radius + 15.0) / 16.0).trunc() as usize * 16).min(65);
-    for y in 0..65usize {
-        for x in 0..65usize {
-            let r2 = (x as f64 - 32.0).powi(2) + (y as f64 - 32.0).powi(2);
-            let a = (o as f64 * (-0.5 * r2 / sigma2).exp()).min(0.99);
-            let inside = (lo_tile..hi_tile).contains(&x) && (lo_tile..hi_tile).contains(&y);
-            let expected = if inside && a >= 1.0 / 255.0 { a } else { 0.0 };
-            let i = y * 65 + x;
-            assert!(
-                (cpu.alpha[i] as f64 - expected).abs() < 1e-6,
-                "reference alpha at ({x},{y})"
-            );
-            assert!(
-                (gpu.alpha[i] as f64 - expected).abs() < 1e-5,
-                "gpu alpha at ({x},{y}): {} vs {expected}",
-                gpu.alpha[i]
-            );
-            assert!(
-                (gpu.plane(1)[i] as f64 - 0.5 * expected).abs() < 1e-5,
-                "gpu channel 1 at ({x},{y})"
-            );
-            assert!(
-                (gpu.inv_depth[i] as f64 - expected / z as f64).abs() < 1e-5,
-                "gpu inverse depth at ({x},{y})"
-            );
+    for mut r in renderers() {
+        let (gpu, _) = r.render(&cloud, &camera, &[0.0; 3]).expect("fits");
+        let lo_tile = ((32.0 - radius) / 16.0).trunc().max(0.0) as usize * 16;
+        let hi_tile = (((32.0 + radius + 15.0) / 16.0).trunc() as usize * 16).min(65);
+        for y in 0..65usize {
+            for x in 0..65usize {
+                let r2 = (x as f64 - 32.0).powi(2) + (y as f64 - 32.0).powi(2);
+                let a = (o as f64 * (-0.5 * r2 / sigma2).exp()).min(0.99);
+                let inside = (lo_tile..hi_tile).contains(&x) && (lo_tile..hi_tile).contains(&y);
+                let expected = if inside && a >= 1.0 / 255.0 { a } else { 0.0 };
+                let i = y * 65 + x;
+                assert!(
+                    (cpu.alpha[i] as f64 - expected).abs() < 1e-6,
+                    "reference alpha at ({x},{y})"
+                );
+                assert!(
+                    (gpu.alpha[i] as f64 - expected).abs() < 1e-5,
+                    "gpu alpha at ({x},{y}): {} vs {expected}",
+                    gpu.alpha[i]
+                );
+                assert!(
+                    (gpu.plane(1)[i] as f64 - 0.5 * expected).abs() < 1e-5,
+                    "gpu channel 1 at ({x},{y})"
+                );
+                assert!(
+                    (gpu.inv_depth[i] as f64 - expected / z as f64).abs() < 1e-5,
+                    "gpu inverse depth at ({x},{y})"
+                );
+            }
         }
+        // The peak is o itself (exp(0) = 1), and the falloff one pixel out is exp(−1/2σ²).
+        assert!((gpu.alpha[32 * 65 + 32] - o).abs() < 1e-6);
     }
-    // The peak is o itself (exp(0) = 1), and the falloff one pixel out is exp(−1/2σ²).
-    assert!((gpu.alpha[32 * 65 + 32] - o).abs() < 1e-6);
 }

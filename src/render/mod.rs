@@ -12,7 +12,7 @@ mod sort;
 pub mod splatter;
 pub mod timing;
 
-pub use pipelines::SplatPipelines;
+pub use pipelines::{RasterTuning, SplatPipelines};
 pub use splatter::{Splatter, Stage};
 
 use crate::camera::Camera;
@@ -137,8 +137,14 @@ pub struct HeadlessRenderer {
 }
 
 impl HeadlessRenderer {
+    /// With the rasterizer layout suited to the adapter ([`RasterTuning::for_adapter`]).
     pub fn new(gpu: GpuContext) -> Self {
-        let pipelines = Arc::new(SplatPipelines::new(&gpu.device));
+        let tuning = RasterTuning::for_adapter(&gpu.adapter.get_info());
+        Self::with_tuning(gpu, tuning)
+    }
+
+    pub fn with_tuning(gpu: GpuContext, tuning: RasterTuning) -> Self {
+        let pipelines = Arc::new(SplatPipelines::new(&gpu.device, tuning));
         let splatter = Splatter::new(&gpu.device, pipelines.clone());
         Self {
             gpu,

@@ -2,14 +2,25 @@
 #![allow(dead_code)]
 
 use guava::gpu::GpuContext;
-use guava::render::{HeadlessRenderer, SplatImage};
+use guava::render::{HeadlessRenderer, RasterTuning, SplatImage};
 
 /// A renderer on the test machine's adapter (lavapipe in CI). Validation errors panic (wgpu's
 /// default uncaptured-error handler), so any invalid GPU use fails the test.
 pub fn renderer() -> HeadlessRenderer {
-    let gpu = GpuContext::headless()
-        .expect("a Vulkan adapter (lavapipe: apt-get install mesa-vulkan-drivers)");
-    HeadlessRenderer::new(gpu)
+    HeadlessRenderer::new(gpu())
+}
+
+fn gpu() -> GpuContext {
+    GpuContext::headless()
+        .expect("a Vulkan adapter (lavapipe: apt-get install mesa-vulkan-drivers)")
+}
+
+/// Renderers for the rasterizer's thread layouts (1 pixel per thread, the GPU default; 4, the CPU
+/// default for few channels), so each is tested whatever the adapter.
+pub fn renderers() -> Vec<HeadlessRenderer> {
+    [1, 4]
+        .map(|p| HeadlessRenderer::with_tuning(gpu(), RasterTuning::PixelsPerThread(p)))
+        .into()
 }
 
 /// Comparison of two renders over every feature channel, alpha and inverse depth.

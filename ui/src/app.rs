@@ -59,7 +59,8 @@ impl GuavaApp {
     pub fn new(cc: &eframe::CreationContext<'_>, options: Options) -> Self {
         let (gpu_ready, adapter, limits) = match cc.wgpu_render_state.as_ref() {
             Some(rs) => {
-                let resources = ViewportResources::new(&rs.device, rs.target_format);
+                let resources =
+                    ViewportResources::new(&rs.device, &rs.adapter.get_info(), rs.target_format);
                 rs.renderer.write().callback_resources.insert(resources);
                 (
                     true,

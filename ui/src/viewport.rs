@@ -6,7 +6,7 @@
 use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
 use guava::render::present::{PresentMode, PresentPass};
-use guava::render::{RenderStats, SplatPipelines, Splatter};
+use guava::render::{RasterTuning, RenderStats, SplatPipelines, Splatter};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
@@ -79,8 +79,15 @@ pub struct ViewportResources {
 }
 
 impl ViewportResources {
-    pub fn new(device: &wgpu::Device, target: wgpu::TextureFormat) -> Self {
-        let pipelines = Arc::new(SplatPipelines::new(device));
+    pub fn new(
+        device: &wgpu::Device,
+        adapter: &wgpu::AdapterInfo,
+        target: wgpu::TextureFormat,
+    ) -> Self {
+        let pipelines = Arc::new(SplatPipelines::new(
+            device,
+            RasterTuning::for_adapter(adapter),
+        ));
         Self {
             splatter: Splatter::new(device, pipelines),
             present: PresentPass::new(device, target),
