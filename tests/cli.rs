@@ -1,0 +1,103 @@
+//! The headless CLI as a user runs it: `guava info`, `guava render`, and clear errors.
+
+use std::process::Command;
+
+fn guava(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_guava"))
+        .args(args)
+        .output()
+        .expect("guava runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn info_reports_adapter_and_onnx_runtime() {
+    let (ok, stdout, stderr) = guava(&["info"]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("adapter:") && stdout.contains("limits:"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains(&format!(
+            "onnxruntime: {} loaded",
+            guava::onnx::PINNED_VERSION
+        )),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn no_adapter_is_one_clear_error() {
+    // DX12 does not exist on Linux: the same path as a machine without any Vulkan driver.
+    if cfg!(target_os = "windows") {
+        return;
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_guava"))
+        .arg("info")
+        .env("WGPU_BACKEND", "dx12")
+        .output()
+        .expect("guava runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("no GPU adapter found") && stderr.contains("mesa-vulkan-drivers"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn render_writes_a_png_and_bad_files_are_named() {
+    let dir = std::env::temp_dir().join(format!("guava-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let ply = dir.join("knot.ply");
+    guava::gaussians::ply::write(&ply, &guava::gaussians::synthetic::torus_knot(5000, 3))
+        .expect("write");
+    let png = dir.join("knot.png");
+    let (ok, stdout, stderr) = guava(&[
+        "render",
+        "--ply",
+        ply.to_str().expect("utf-8"),
+        "--out",
+        png.to_str().expect("utf-8"),
+        "--width",
+        "96",
+        "--height",
+        "64",
+        "--yaw",
+        "-30",
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("5000 Gaussians"), "{stdout}");
+    let img = image::open(&png).expect("a PNG").to_rgb8();
+    assert_eq!(img.dimensions(), (96, 64));
+    assert!(
+        img.pixels().any(|p| p.0.iter().any(|&c| c > 100)),
+        "the knot is visible"
+    );
+
+    let bad = dir.join("bad.ply");
+    std::fs::write(
+        &bad,
+        "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n",
+    )
+    .expect("write");
+    let (ok, _, stderr) = guava(&[
+        "render",
+        "--ply",
+        bad.to_str().expect("utf-8"),
+        "--out",
+        png.to_str().expect("utf-8"),
+    ]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("bad.ply") && stderr.contains("`y` is missing"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
