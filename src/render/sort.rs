@@ -1,6 +1,6 @@
 //! Host side of shaders/radix_sort.wgsl: a stable LSD sort of (u32 key, u32 value) pairs on the GPU,
-//! 4 bits per pass, ping-ponging between the A and B buffers. The pass count is rounded up to even
-//! so the result always ends in A. The live element count is read on the GPU from a buffer;
+//! 4 bits per pass, ping-ponging between the A and B buffers; after an odd number of passes the
+//! result is in B ([`RadixSort::result_in_b`]). The live element count is read on the GPU from a buffer;
 //! dispatches are sized for the buffers' capacity and idle blocks exit at once.
 
 use super::layout::SortPass;
@@ -30,9 +30,9 @@ pub(crate) struct RadixSort {
     num_blocks: u32,
 }
 
-/// Passes needed for keys below `2^key_bits`, rounded up to even.
+/// Passes needed for keys below `2^key_bits` (at least one).
 pub fn pass_count(key_bits: u32) -> u32 {
-    key_bits.div_ceil(BITS_PER_PASS).next_multiple_of(2).max(2)
+    key_bits.div_ceil(BITS_PER_PASS).max(1)
 }
 
 impl RadixSort {
@@ -120,6 +120,11 @@ impl RadixSort {
         }
     }
 
+    /// After an odd number of passes the sorted pairs are in the B buffers.
+    pub fn result_in_b(&self) -> bool {
+        self.passes.len() % 2 == 1
+    }
+
     pub fn encode(&self, pipes: &SplatPipelines, pass: &mut wgpu::ComputePass<'_>) {
         for bind_group in &self.passes {
             pass.set_bind_group(0, bind_group, &[]);
@@ -190,7 +195,12 @@ mod tests {
         if n == 0 {
             return (Vec::new(), Vec::new());
         }
-        let out = read_buffers(device, queue, &[(&ka, n), (&va, n)]);
+        let (k, v) = if sort.result_in_b() {
+            (&kb, &vb)
+        } else {
+            (&ka, &va)
+        };
+        let out = read_buffers(device, queue, &[(k, n), (v, n)]);
         (
             bytemuck::cast_slice(&out[0]).to_vec(),
             bytemuck::cast_slice(&out[1]).to_vec(),
@@ -245,10 +255,10 @@ mod tests {
     }
 
     #[test]
-    fn pass_count_is_even() {
+    fn pass_count_covers_the_key_bits() {
         assert_eq!(pass_count(32), 8);
-        assert_eq!(pass_count(10), 4);
-        assert_eq!(pass_count(1), 2);
-        assert_eq!(pass_count(0), 2);
+        assert_eq!(pass_count(10), 3);
+        assert_eq!(pass_count(1), 1);
+        assert_eq!(pass_count(0), 1);
     }
 }

@@ -446,10 +446,20 @@ impl Splatter {
             v.pair_capacity,
             tile_bits,
         );
+        assert!(
+            !depth_sort.result_in_b(),
+            "gather_counts and emit_keys read the depth order from A"
+        );
+        // The tile sort's pass count follows the tile count; read its result where it landed.
+        let (sorted_keys, sorted_vals) = if tile_sort.result_in_b() {
+            (&v.tile_keys_tmp, &v.tile_vals_tmp)
+        } else {
+            (&v.tile_keys, &v.tile_vals)
+        };
         let ranges = group(
             "Splat::tile_ranges",
             &pipes.ranges_layout,
-            &[&v.tile_keys, &self.pair_count, &v.ranges],
+            &[sorted_keys, &self.pair_count, &v.ranges],
         );
         let features_view = array_view(&v.out_features);
         let aux_view = array_view(&v.out_aux);
@@ -459,7 +469,7 @@ impl Splatter {
             entries: &[
                 entry(0, &self.frame),
                 entry(1, &v.ranges),
-                entry(2, &v.tile_vals),
+                entry(2, sorted_vals),
                 entry(3, &c.projected),
                 entry(4, &c.features),
                 entry(5, &v.background),
