@@ -18,9 +18,9 @@ use std::time::Instant;
 pub struct Options {
     pub open: Option<PathBuf>,
     pub test_scene: bool,
-    /// Save the window's own frame as PNG at frame `exit_after_frames`, then close.
+    /// Save the window's own frame as PNG when `exit_after_secs` have passed, then close.
     pub screenshot: Option<PathBuf>,
-    pub exit_after_frames: Option<u64>,
+    pub exit_after_secs: Option<f32>,
 }
 
 struct Scene {
@@ -48,6 +48,9 @@ pub struct GuavaApp {
     loading: Option<Loading>,
     status: Option<(String, bool)>,
     frames: u64,
+    /// When the window was created (for `exit_after_secs`).
+    launched: Instant,
+    exiting: bool,
     gpu_ready: bool,
     adapter: String,
     limits: wgpu::Limits,
@@ -81,6 +84,8 @@ impl GuavaApp {
             loading: None,
             status: None,
             frames: 0,
+            launched: Instant::now(),
+            exiting: false,
             gpu_ready,
             adapter,
             limits,
@@ -458,11 +463,13 @@ impl GuavaApp {
             // The real-window test waits for this line before taking its own screenshot.
             println!("guava-viewer: ready");
         }
-        let Some(n) = self.options.exit_after_frames else {
+        let Some(secs) = self.options.exit_after_secs else {
             return;
         };
         ctx.request_repaint();
-        if self.frames == n {
+        // Wall-clock, not frames: a fast GPU would otherwise close before a test can look at it.
+        if !self.exiting && self.launched.elapsed().as_secs_f32() >= secs {
+            self.exiting = true;
             match self.options.screenshot.clone() {
                 Some(path) => {
                     let ctx2 = ctx.clone();

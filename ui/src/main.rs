@@ -13,12 +13,12 @@ struct Args {
     /// Start with the synthetic test scene.
     #[arg(long)]
     test_scene: bool,
-    /// Save the window's frame as PNG (with --exit-after-frames).
-    #[arg(long, requires = "exit_after_frames")]
+    /// Save the window's frame as PNG (with --exit-after-secs).
+    #[arg(long, requires = "exit_after_secs")]
     screenshot: Option<PathBuf>,
-    /// Close after this many frames (for tests and scripted screenshots).
+    /// Close after this many seconds (for tests and scripted screenshots).
     #[arg(long)]
-    exit_after_frames: Option<u64>,
+    exit_after_secs: Option<f32>,
 }
 
 fn main() {
@@ -35,7 +35,7 @@ fn main() {
         open: args.file,
         test_scene: args.test_scene,
         screenshot: args.screenshot,
-        exit_after_frames: args.exit_after_frames,
+        exit_after_secs: args.exit_after_secs,
     };
     let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
     // The splatting pass needs more than egui's default limits; ask for them on egui's own device.

@@ -77,7 +77,7 @@ fn the_viewer_window_shows_the_scene_and_exits_cleanly() {
     let self_shot = dir.join("frame.png");
     let x_shot = dir.join("screen.png");
     let mut viewer = Command::new(env!("CARGO_BIN_EXE_guava-viewer"))
-        .args(["--test-scene", "--exit-after-frames", "40", "--screenshot"])
+        .args(["--test-scene", "--exit-after-secs", "15", "--screenshot"])
         .arg(&self_shot)
         .env("DISPLAY", &xvfb.display)
         .env("XDG_RUNTIME_DIR", runtime_dir())
@@ -95,7 +95,8 @@ fn the_viewer_window_shows_the_scene_and_exits_cleanly() {
         }
     }
     assert!(ready, "the viewer never reported its first frames");
-    // Give the splatting pass a few frames, then photograph the X screen itself.
+    // Give the splatting pass a few frames, then photograph the X screen itself (the viewer
+    // stays up for 15 s from launch, whatever its frame rate).
     std::thread::sleep(Duration::from_secs(2));
     let status = Command::new("import")
         .args(["-display", &xvfb.display, "-window", "root"])
