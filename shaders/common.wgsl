@@ -61,3 +61,10 @@ fn is_finite(x: f32) -> bool {
 fn flat_id(wid: vec3<u32>, nwg: vec3<u32>, lid: u32, wg_size: u32) -> u32 {
     return (wid.y * nwg.x + wid.x) * wg_size + lid;
 }
+
+// Display-referred (sRGB-encoded) colour to linear, for writing into an sRGB render target.
+fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
+    let lo = c / 12.92;
+    let hi = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
+    return select(hi, lo, c <= vec3<f32>(0.04045));
+}

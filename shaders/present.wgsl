@@ -33,12 +33,6 @@ fn vs_main(@builtin(vertex_index) v: u32) -> VertexOut {
     return out;
 }
 
-fn to_linear(c: vec3<f32>) -> vec3<f32> {
-    let lo = c / 12.92;
-    let hi = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
-    return select(hi, lo, c <= vec3<f32>(0.04045));
-}
-
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let p = min(vec2<u32>(in.uv * vec2<f32>(params.size)), params.size - 1u);
@@ -64,7 +58,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     // Feature values are display-referred (like the photos they come from); clamp NaN-free.
     c = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
     if params.srgb_target != 0u {
-        c = to_linear(c);
+        c = srgb_to_linear(c);
     }
     return vec4<f32>(c, 1.0);
 }

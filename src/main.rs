@@ -53,6 +53,8 @@ enum Command {
 enum Bench {
     /// The splatting pass: per-stage times over cloud sizes, resolutions and channel counts.
     Splat(guava::bench::SplatBenchArgs),
+    /// Posing the default body on one CPU core: skinning, transforms and triangle frames.
+    Body(guava::bench::BodyBenchArgs),
 }
 
 fn main() {
@@ -100,9 +102,10 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
-        Command::Bench {
-            which: Bench::Splat(args),
-        } => guava::bench::splat(&args),
+        Command::Bench { which } => match which {
+            Bench::Splat(args) => guava::bench::splat(&args),
+            Bench::Body(args) => guava::bench::body(&args),
+        },
     }
 }
 

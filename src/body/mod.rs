@@ -10,11 +10,13 @@
 mod frames;
 mod glb;
 mod joint_map;
+mod normals;
 mod pose;
 
 pub use frames::{TriangleFrame, triangle_frames};
 pub use glb::BodyAssetError;
 pub use joint_map::{SMPLX_JOINTS, smplx_to_default};
+pub use normals::vertex_normals;
 pub use pose::{BodyPose, PoseError, PosedBody};
 
 use glam::{Vec2, Vec3};

@@ -2,6 +2,7 @@
 //! ([`reference`]), and the present pass that shows the output in a window ([`present`]).
 
 pub mod layout;
+pub mod mesh;
 pub mod pipelines;
 pub mod present;
 pub mod readback;

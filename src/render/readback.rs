@@ -53,12 +53,21 @@ pub fn wait(device: &wgpu::Device) {
 }
 
 /// All layers of an r32float 2D array texture as one f32 vector, layer-major ([L, H, W]).
-/// Rows are padded to wgpu's 256-byte copy alignment on the GPU and unpadded here.
 pub fn read_texture_layers(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     texture: &wgpu::Texture,
 ) -> Vec<f32> {
+    bytemuck::pod_collect_to_vec(&read_texture_bytes(device, queue, texture))
+}
+
+/// The texels of a texture with 4-byte texels (r32float, rgba8…), layer-major and row-major.
+/// Rows are padded to wgpu's 256-byte copy alignment on the GPU and unpadded here.
+pub fn read_texture_bytes(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Vec<u8> {
     let size = texture.size();
     let (w, h, layers) = (
         size.width as usize,
@@ -95,10 +104,10 @@ pub fn read_texture_layers(
         }
     });
     wait(device);
-    let mut out = Vec::with_capacity(w * h * layers);
+    let mut out = Vec::with_capacity(row * h * layers);
     if let Ok(view) = staging.slice(..).get_mapped_range() {
         for chunk in view.chunks_exact(padded) {
-            out.extend_from_slice(bytemuck::cast_slice(&chunk[..row]));
+            out.extend_from_slice(&chunk[..row]);
         }
     }
     staging.unmap();

@@ -9,6 +9,7 @@ pub const TILE_KEYS: &str = include_str!("../../shaders/tile_keys.wgsl");
 pub const TILE_RANGES: &str = include_str!("../../shaders/tile_ranges.wgsl");
 pub const RASTERIZE: &str = include_str!("../../shaders/rasterize.wgsl");
 pub const PRESENT: &str = include_str!("../../shaders/present.wgsl");
+pub const MESH: &str = include_str!("../../shaders/mesh.wgsl");
 
 /// `const NAME: u32 = value` lines prepended to a pass.
 pub type Consts = &'static [(&'static str, u32)];
@@ -22,6 +23,7 @@ pub const ALL: &[(&str, &str, Consts)] = &[
     ("tile_ranges", TILE_RANGES, &[]),
     ("rasterize", RASTERIZE, &[("CHANNELS", 3), ("PIXELS", 1)]),
     ("present", PRESENT, &[]),
+    ("mesh", MESH, &[]),
 ];
 
 pub fn compose(pass: &str, consts: &[(&str, u32)]) -> String {

@@ -14,6 +14,8 @@ use crate::render::readback::wait;
 use crate::render::timing::StageTimer;
 use crate::render::{HeadlessRenderer, Stage};
 use glam::Vec3;
+
+use super::median;
 use std::time::Instant;
 
 #[derive(clap::Args, Clone, Debug)]
@@ -33,15 +35,6 @@ pub struct SplatBenchArgs {
     /// Also write each configuration's cloud as PLY here (to time a peer renderer on the same data).
     #[arg(long)]
     pub write_ply: Option<std::path::PathBuf>,
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    if v.is_empty() {
-        f64::NAN
-    } else {
-        v[v.len() / 2]
-    }
 }
 
 pub fn splat(args: &SplatBenchArgs) -> anyhow::Result<()> {

@@ -1,0 +1,81 @@
+// Mesh view of a posed body: headlight-shaded triangles, an optional wireframe of the triangle
+// edges drawn over them, and the blit that puts the offscreen image into the viewer's pass.
+
+struct MeshUniforms {
+    clip_from_world: mat4x4<f32>,
+    view_from_world: mat4x4<f32>,
+    surface: vec4<f32>,
+    wire: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> mesh: MeshUniforms;
+
+struct MeshIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+}
+
+struct MeshOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) normal_view: vec3<f32>,
+    @location(1) position_view: vec3<f32>,
+}
+
+@vertex
+fn vs_mesh(in: MeshIn) -> MeshOut {
+    var out: MeshOut;
+    out.clip = mesh.clip_from_world * vec4<f32>(in.position, 1.0);
+    out.position_view = (mesh.view_from_world * vec4<f32>(in.position, 1.0)).xyz;
+    out.normal_view = (mesh.view_from_world * vec4<f32>(in.normal, 0.0)).xyz;
+    return out;
+}
+
+@fragment
+fn fs_shaded(in: MeshOut) -> @location(0) vec4<f32> {
+    // Two-sided Lambert from a light at the eye: the view direction is the light direction.
+    let to_eye = normalize(-in.position_view);
+    var n = in.normal_view;
+    let len = length(n);
+    n = select(to_eye, n / len, len > 1e-12);
+    let lambert = abs(dot(n, to_eye));
+    return vec4<f32>(mesh.surface.rgb * (0.25 + 0.75 * lambert), 1.0);
+}
+
+@fragment
+fn fs_wire() -> @location(0) vec4<f32> {
+    return mesh.wire;
+}
+
+// Blit: the offscreen image, one texel per pixel, into the viewer's target.
+struct BlitParams {
+    size: vec2<u32>,
+    srgb_target: u32,
+    _pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> blit: BlitParams;
+@group(0) @binding(1) var image: texture_2d<f32>;
+
+struct BlitOut {
+    @builtin(position) position: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+}
+
+@vertex
+fn vs_blit(@builtin(vertex_index) v: u32) -> BlitOut {
+    let uv = vec2<f32>(f32((v << 1u) & 2u), f32(v & 2u));
+    var out: BlitOut;
+    out.position = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0);
+    out.uv = uv;
+    return out;
+}
+
+@fragment
+fn fs_blit(in: BlitOut) -> @location(0) vec4<f32> {
+    let p = min(vec2<u32>(in.uv * vec2<f32>(blit.size)), blit.size - 1u);
+    var c = textureLoad(image, p, 0).rgb;
+    if blit.srgb_target != 0u {
+        c = srgb_to_linear(c);
+    }
+    return vec4<f32>(c, 1.0);
+}

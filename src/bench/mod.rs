@@ -1,0 +1,16 @@
+//! Benchmarks behind `guava bench …`: each prints a table of medians and the hardware it ran on.
+
+mod body;
+mod splat;
+
+pub use body::{BodyBenchArgs, body};
+pub use splat::{SplatBenchArgs, splat};
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() {
+        f64::NAN
+    } else {
+        v[v.len() / 2]
+    }
+}
