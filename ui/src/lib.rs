@@ -1,8 +1,9 @@
-//! The guava-rs viewer: an eframe window whose central viewport is drawn by the splatting pass on
-//! egui's own wgpu device.
+//! The guava-rs viewer: an eframe window whose central viewport is drawn by the splatting pass
+//! (or the body mesh view) on egui's own wgpu device.
 
 pub mod app;
+pub mod body_panel;
 pub mod orbit;
 pub mod viewport;
 
-pub use app::{GuavaApp, Options};
+pub use app::{GuavaApp, Options, View};

@@ -12,6 +12,8 @@ pub struct OrbitCamera {
     pub yaw_rad: f32,
     pub pitch_rad: f32,
     pub fov_y_rad: f32,
+    /// World +y is up (body models) rather than down (GUAVA/COLMAP cameras, most 3DGS scenes).
+    pub y_up: bool,
 }
 
 impl Default for OrbitCamera {
@@ -22,6 +24,7 @@ impl Default for OrbitCamera {
             yaw_rad: 0.0,
             pitch_rad: 0.0,
             fov_y_rad: 50f32.to_radians(),
+            y_up: false,
         }
     }
 }
@@ -31,9 +34,14 @@ const PITCH_LIMIT: f32 = 1.55;
 impl OrbitCamera {
     /// Frames the cloud's bounding sphere, keeping the field of view.
     pub fn framing(cloud: &GaussianCloud, fov_y_rad: f32) -> Self {
-        let Some((lo, hi)) = cloud.bounds() else {
-            return Self::default();
-        };
+        match cloud.bounds() {
+            Some((lo, hi)) => Self::framing_box(lo, hi, fov_y_rad),
+            None => Self::default(),
+        }
+    }
+
+    /// Frames the bounding sphere of the box `lo..hi`, keeping the field of view.
+    pub fn framing_box(lo: Vec3, hi: Vec3, fov_y_rad: f32) -> Self {
         let radius = (0.5 * (hi - lo).length()).max(1e-3);
         Self {
             target: 0.5 * (lo + hi),
@@ -44,7 +52,14 @@ impl OrbitCamera {
     }
 
     pub fn view_from_world(&self) -> Mat4 {
-        orbit(self.target, self.distance, self.yaw_rad, self.pitch_rad)
+        if self.y_up {
+            // Turn a y-up, +z-facing world half a turn about x: yaw 0 then faces its front.
+            let flip = Mat4::from_diagonal(glam::Vec4::new(1.0, -1.0, -1.0, 1.0));
+            let target = flip.transform_point3(self.target);
+            orbit(target, self.distance, self.yaw_rad, self.pitch_rad) * flip
+        } else {
+            orbit(self.target, self.distance, self.yaw_rad, self.pitch_rad)
+        }
     }
 
     pub fn camera(&self, width: u32, height: u32) -> Camera {

@@ -1,10 +1,13 @@
 //! The central viewport: one egui_wgpu paint callback on egui's own device. Long-lived GPU state
-//! (pipelines, the splatter, the present pass) lives once in `callback_resources`; the per-view
-//! state (camera, cloud, display settings) rides in the callback value. `prepare` records the
-//! splatting pass only when that state changed since the last render; `paint` only composites.
+//! (pipelines, the splatter, the present pass, the mesh pass) lives once in `callback_resources`;
+//! the per-view state (what to show, camera, display settings) rides in the callback value.
+//! `prepare` records a pass only when that state changed since the last render; `paint` only
+//! composites.
 
+use glam::Vec3;
 use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
+use guava::render::mesh::{MeshPass, MeshStyle};
 use guava::render::present::{PresentMode, PresentPass};
 use guava::render::{RasterTuning, RenderStats, SplatPipelines, Splatter};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -46,12 +49,40 @@ pub struct SceneRef {
     pub cloud: Arc<GaussianCloud>,
 }
 
-pub struct SplatCallback {
-    pub scene: SceneRef,
+/// A posed body for the mesh view. `topology` changes with the body model, `pose` with every
+/// re-pose, so the viewport uploads each only once.
+#[derive(Clone)]
+pub struct BodyFrame {
+    pub topology: u64,
+    pub pose: u64,
+    pub triangles: Arc<Vec<[u32; 3]>>,
+    pub positions: Arc<Vec<Vec3>>,
+    pub normals: Arc<Vec<Vec3>>,
+    pub style: MeshStyle,
+}
+
+/// What the viewport shows this frame.
+#[derive(Clone)]
+pub enum Content {
+    Splats {
+        scene: SceneRef,
+        background: Vec<f32>,
+        display: DisplaySettings,
+    },
+    Body(BodyFrame),
+}
+
+pub struct ViewportCallback {
+    pub content: Content,
     pub camera: Camera,
-    pub background: Vec<f32>,
-    pub display: DisplaySettings,
     pub report: Arc<Mutex<ViewportReport>>,
+}
+
+#[derive(PartialEq)]
+struct MeshKey {
+    pose: u64,
+    camera: Camera,
+    style: MeshStyle,
 }
 
 #[derive(PartialEq)]
@@ -76,6 +107,10 @@ pub struct ViewportResources {
     last: Option<RenderKey>,
     stats_staging: wgpu::Buffer,
     stats_state: StatsReadback,
+    mesh: MeshPass,
+    mesh_topology: Option<u64>,
+    mesh_uploaded: Option<u64>,
+    mesh_last: Option<MeshKey>,
 }
 
 impl ViewportResources {
@@ -107,7 +142,49 @@ impl ViewportResources {
                 mapped_at_creation: false,
             }),
             stats_state: StatsReadback::Idle,
+            mesh: MeshPass::new(device, Some(target)),
+            mesh_topology: None,
+            mesh_uploaded: None,
+            mesh_last: None,
         }
+    }
+
+    /// Re-draws the mesh view when the pose, camera or style changed.
+    fn prepare_body(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        body: &BodyFrame,
+        camera: &Camera,
+        report: &mut ViewportReport,
+    ) -> Option<wgpu::CommandBuffer> {
+        if self.mesh_topology != Some(body.topology) {
+            self.mesh
+                .set_topology(device, body.positions.len(), &body.triangles);
+            self.mesh_topology = Some(body.topology);
+            self.mesh_uploaded = None;
+        }
+        if self.mesh_uploaded != Some(body.pose) {
+            self.mesh
+                .set_vertices(queue, &body.positions, &body.normals);
+            self.mesh_uploaded = Some(body.pose);
+        }
+        let key = MeshKey {
+            pose: body.pose,
+            camera: *camera,
+            style: body.style,
+        };
+        if self.mesh_last.as_ref() == Some(&key) {
+            return None;
+        }
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("Viewport::mesh"),
+        });
+        self.mesh
+            .encode(device, queue, &mut encoder, camera, &body.style);
+        self.mesh_last = Some(key);
+        report.renders += 1;
+        Some(encoder.finish())
     }
 
     /// Advances the non-blocking stats readback; returns stats when a copy has landed.
@@ -146,7 +223,80 @@ impl ViewportResources {
     }
 }
 
-impl egui_wgpu::CallbackTrait for SplatCallback {
+impl ViewportResources {
+    /// Re-splats when the cloud, camera or background changed; updates the present uniform.
+    #[allow(clippy::too_many_arguments)]
+    fn prepare_splats(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneRef,
+        background: &[f32],
+        display: &DisplaySettings,
+        camera: &Camera,
+        report: &mut ViewportReport,
+    ) -> Option<wgpu::CommandBuffer> {
+        if let Some(stats) = self.poll_stats(device) {
+            if self.splatter.grow_for(device, &stats) {
+                self.last = None;
+                report.needs_redraw = true;
+            }
+            report.stats = Some(stats);
+        }
+        if self.uploaded != Some(scene.generation) {
+            // Marked uploaded either way: a cloud that does not fit is reported once, not every frame.
+            self.uploaded = Some(scene.generation);
+            self.last = None;
+            if let Err(e) = self.splatter.upload(device, queue, &scene.cloud) {
+                report.error = Some(e.to_string());
+            }
+        }
+        let key = RenderKey {
+            generation: scene.generation,
+            camera: *camera,
+            background: background.to_vec(),
+        };
+        let mut buffer = None;
+        if self.last.as_ref() != Some(&key) {
+            self.splatter.prepare(device, queue, camera, background);
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("Viewport::splat"),
+            });
+            self.splatter.encode(&mut encoder, None);
+            if matches!(self.stats_state, StatsReadback::Idle) {
+                encoder.copy_buffer_to_buffer(
+                    self.splatter.stats_buffer(),
+                    0,
+                    &self.stats_staging,
+                    0,
+                    32,
+                );
+                self.stats_state = StatsReadback::Copied;
+            }
+            buffer = Some(encoder.finish());
+            self.present_bind = self
+                .present
+                .bind(device, &self.present_uniform, &self.splatter);
+            self.last = Some(key);
+            report.renders += 1;
+        } else if matches!(
+            self.stats_state,
+            StatsReadback::Copied | StatsReadback::Mapping(_)
+        ) {
+            report.needs_redraw = true;
+        }
+        let uniform = self.present.uniform(
+            [camera.width, camera.height],
+            display.mode,
+            display.rgb_channels,
+            display.inv_depth_range,
+        );
+        queue.write_buffer(&self.present_uniform, 0, bytemuck::bytes_of(&uniform));
+        buffer
+    }
+}
+
+impl egui_wgpu::CallbackTrait for ViewportCallback {
     fn prepare(
         &self,
         device: &wgpu::Device,
@@ -160,65 +310,23 @@ impl egui_wgpu::CallbackTrait for SplatCallback {
             return Vec::new();
         };
         let mut report = self.report.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(stats) = res.poll_stats(device) {
-            if res.splatter.grow_for(device, &stats) {
-                res.last = None;
-                report.needs_redraw = true;
-            }
-            report.stats = Some(stats);
-        }
-        if res.uploaded != Some(self.scene.generation) {
-            // Marked uploaded either way: a cloud that does not fit is reported once, not every frame.
-            res.uploaded = Some(self.scene.generation);
-            res.last = None;
-            if let Err(e) = res.splatter.upload(device, queue, &self.scene.cloud) {
-                report.error = Some(e.to_string());
-            }
-        }
-        let key = RenderKey {
-            generation: self.scene.generation,
-            camera: self.camera,
-            background: self.background.clone(),
+        let buffer = match &self.content {
+            Content::Splats {
+                scene,
+                background,
+                display,
+            } => res.prepare_splats(
+                device,
+                queue,
+                scene,
+                background,
+                display,
+                &self.camera,
+                &mut report,
+            ),
+            Content::Body(body) => res.prepare_body(device, queue, body, &self.camera, &mut report),
         };
-        let mut buffers = Vec::new();
-        if res.last.as_ref() != Some(&key) {
-            res.splatter
-                .prepare(device, queue, &self.camera, &self.background);
-            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("Viewport::splat"),
-            });
-            res.splatter.encode(&mut encoder, None);
-            if matches!(res.stats_state, StatsReadback::Idle) {
-                encoder.copy_buffer_to_buffer(
-                    res.splatter.stats_buffer(),
-                    0,
-                    &res.stats_staging,
-                    0,
-                    32,
-                );
-                res.stats_state = StatsReadback::Copied;
-            }
-            buffers.push(encoder.finish());
-            res.present_bind = res
-                .present
-                .bind(device, &res.present_uniform, &res.splatter);
-            res.last = Some(key);
-            report.renders += 1;
-        } else if matches!(
-            res.stats_state,
-            StatsReadback::Copied | StatsReadback::Mapping(_)
-        ) {
-            report.needs_redraw = true;
-        }
-        let d = &self.display;
-        let uniform = res.present.uniform(
-            [self.camera.width, self.camera.height],
-            d.mode,
-            d.rgb_channels,
-            d.inv_depth_range,
-        );
-        queue.write_buffer(&res.present_uniform, 0, bytemuck::bytes_of(&uniform));
-        buffers
+        buffer.into_iter().collect()
     }
 
     fn paint(
@@ -230,8 +338,13 @@ impl egui_wgpu::CallbackTrait for SplatCallback {
         let Some(res) = resources.get::<ViewportResources>() else {
             return;
         };
-        if let Some(bind) = &res.present_bind {
-            res.present.draw(pass, bind);
+        match &self.content {
+            Content::Splats { .. } => {
+                if let Some(bind) = &res.present_bind {
+                    res.present.draw(pass, bind);
+                }
+            }
+            Content::Body(_) => res.mesh.draw_blit(pass),
         }
     }
 }

@@ -2,7 +2,7 @@
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use guava_ui::{GuavaApp, Options};
+use guava_ui::{GuavaApp, Options, View};
 use std::time::{Duration, Instant};
 
 /// One frame through the whole pipeline: UI logic, then a real render (paint callbacks included).
@@ -21,6 +21,10 @@ fn harness(options: Options) -> Harness<'static, GuavaApp> {
 #[test]
 fn empty_state_says_what_to_open_and_the_test_scene_renders() {
     let mut h = harness(Options::default());
+    h.run();
+    // The viewer opens on the default body; the Gaussian view is empty until something loads.
+    assert_eq!(h.state().view(), View::Body);
+    h.state_mut().set_view(View::Gaussians);
     h.run();
     h.get_by_label("Nothing loaded");
     h.get_by_label("Drop a 3DGS .ply file here, or use File > Open…");
@@ -107,4 +111,38 @@ fn bad_files_are_reported_and_the_scene_is_kept() {
     let status = h.state().status().unwrap_or_default().to_string();
     assert!(status.contains("not implemented yet"), "{status}");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_default_body_is_shown_and_re_posed_only_when_a_slider_moves() {
+    let mut h = harness(Options::default());
+    h.get_by_label_contains("default body template");
+    assert!(
+        h.query_all_by_label("jawOpen").count() >= 1,
+        "expression sliders are shown"
+    );
+    for _ in 0..5 {
+        frame(&mut h);
+    }
+    let before = h.state().report().renders;
+    assert!(before >= 1, "the mesh view was drawn");
+    for _ in 0..5 {
+        frame(&mut h);
+    }
+    assert_eq!(
+        h.state().report().renders,
+        before,
+        "an unchanged pose is not redrawn"
+    );
+    let body = h.state_mut().body_mut().expect("default body");
+    let model = body.model.clone();
+    body.pose
+        .set_coefficient(&model, "jawOpen", 1.0)
+        .expect("target");
+    frame(&mut h);
+    assert_eq!(
+        h.state().report().renders,
+        before + 1,
+        "a pose change draws once"
+    );
 }
