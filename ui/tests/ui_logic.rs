@@ -146,3 +146,56 @@ fn the_default_body_is_shown_and_re_posed_only_when_a_slider_moves() {
         "a pose change draws once"
     );
 }
+
+/// Steps the app until its status line mentions `needle` (loading runs on a worker thread).
+fn wait_for_status(h: &mut Harness<'static, GuavaApp>, needle: &str) -> String {
+    let start = Instant::now();
+    while h.state().status().is_none_or(|s| !s.contains(needle))
+        && start.elapsed() < Duration::from_secs(10)
+    {
+        h.step();
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    h.state().status().unwrap_or_default().to_string()
+}
+
+#[test]
+fn body_templates_open_by_file_and_bad_ones_keep_the_current_body() {
+    let mut h = harness(Options::default());
+    h.run();
+    let dir = std::env::temp_dir().join(format!("guava-ui-glb-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let bad = dir.join("truncated.glb");
+    let glb = guava::body::DEFAULT_BODY_GLB;
+    std::fs::write(&bad, &glb[..glb.len() / 3]).expect("write");
+    h.state_mut().open(bad);
+    let status = wait_for_status(&mut h, "truncated.glb");
+    assert!(status.contains("truncated.glb: "), "{status}");
+    let label = h.state().body_label().unwrap_or_default().to_string();
+    assert!(
+        label.starts_with("default body template"),
+        "the default body stays: {label}"
+    );
+
+    let good = dir.join("copy.glb");
+    std::fs::write(&good, glb).expect("write");
+    h.state_mut().open(good);
+    let start = Instant::now();
+    while h
+        .state()
+        .body_label()
+        .is_none_or(|l| !l.contains("copy.glb"))
+        && start.elapsed() < Duration::from_secs(10)
+    {
+        h.step();
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert!(
+        h.state()
+            .body_label()
+            .unwrap_or_default()
+            .contains("copy.glb")
+    );
+    assert_eq!(h.state().view(), View::Body);
+    std::fs::remove_dir_all(&dir).ok();
+}
