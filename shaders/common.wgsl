@@ -68,3 +68,23 @@ fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     let hi = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
     return select(hi, lo, c <= vec3<f32>(0.04045));
 }
+
+// Full-screen triangle for passes that draw an image one texel per pixel: clip position and
+// uv in [0, 1] (y down) for vertex 0, 1, 2.
+struct FullscreenOut {
+    @builtin(position) position: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+}
+
+fn fullscreen_vertex(v: u32) -> FullscreenOut {
+    let uv = vec2<f32>(f32((v << 1u) & 2u), f32(v & 2u));
+    var out: FullscreenOut;
+    out.position = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0);
+    out.uv = uv;
+    return out;
+}
+
+// The texel under a full-screen uv, clamped into a `size` image.
+fn fullscreen_texel(uv: vec2<f32>, size: vec2<u32>) -> vec2<u32> {
+    return min(vec2<u32>(uv * vec2<f32>(size)), size - 1u);
+}

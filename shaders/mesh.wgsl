@@ -56,23 +56,14 @@ struct BlitParams {
 @group(0) @binding(0) var<uniform> blit: BlitParams;
 @group(0) @binding(1) var image: texture_2d<f32>;
 
-struct BlitOut {
-    @builtin(position) position: vec4<f32>,
-    @location(0) uv: vec2<f32>,
-}
-
 @vertex
-fn vs_blit(@builtin(vertex_index) v: u32) -> BlitOut {
-    let uv = vec2<f32>(f32((v << 1u) & 2u), f32(v & 2u));
-    var out: BlitOut;
-    out.position = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0);
-    out.uv = uv;
-    return out;
+fn vs_blit(@builtin(vertex_index) v: u32) -> FullscreenOut {
+    return fullscreen_vertex(v);
 }
 
 @fragment
-fn fs_blit(in: BlitOut) -> @location(0) vec4<f32> {
-    let p = min(vec2<u32>(in.uv * vec2<f32>(blit.size)), blit.size - 1u);
+fn fs_blit(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let p = fullscreen_texel(in.uv, blit.size);
     var c = textureLoad(image, p, 0).rgb;
     if blit.srgb_target != 0u {
         c = srgb_to_linear(c);

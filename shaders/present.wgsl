@@ -19,23 +19,14 @@ const MODE_DEPTH: u32 = 2u;
 @group(0) @binding(1) var features: texture_2d_array<f32>;
 @group(0) @binding(2) var aux: texture_2d_array<f32>;
 
-struct VertexOut {
-    @builtin(position) position: vec4<f32>,
-    @location(0) uv: vec2<f32>,
-}
-
 @vertex
-fn vs_main(@builtin(vertex_index) v: u32) -> VertexOut {
-    let uv = vec2<f32>(f32((v << 1u) & 2u), f32(v & 2u));
-    var out: VertexOut;
-    out.position = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0);
-    out.uv = uv;
-    return out;
+fn vs_main(@builtin(vertex_index) v: u32) -> FullscreenOut {
+    return fullscreen_vertex(v);
 }
 
 @fragment
-fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
-    let p = min(vec2<u32>(in.uv * vec2<f32>(params.size)), params.size - 1u);
+fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let p = fullscreen_texel(in.uv, params.size);
     var c: vec3<f32>;
     switch params.mode {
         case MODE_ALPHA: {

@@ -89,14 +89,7 @@ fn bad_files_are_reported_and_the_scene_is_kept() {
     )
     .expect("write");
     h.state_mut().open(bad.clone());
-    let start = Instant::now();
-    while h.state().status().is_none_or(|s| !s.contains("broken.ply"))
-        && start.elapsed() < Duration::from_secs(10)
-    {
-        h.step();
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    let status = h.state().status().unwrap_or_default().to_string();
+    let status = wait_for_status(&mut h, "broken.ply");
     assert!(
         status.contains("broken.ply") && status.contains("`y` is missing"),
         "{status}"
@@ -147,15 +140,18 @@ fn the_default_body_is_shown_and_re_posed_only_when_a_slider_moves() {
     );
 }
 
-/// Steps the app until its status line mentions `needle` (loading runs on a worker thread).
-fn wait_for_status(h: &mut Harness<'static, GuavaApp>, needle: &str) -> String {
+/// Steps the app until `done` holds or 10 s pass (loading runs on a worker thread).
+fn wait_until(h: &mut Harness<'static, GuavaApp>, done: impl Fn(&GuavaApp) -> bool) {
     let start = Instant::now();
-    while h.state().status().is_none_or(|s| !s.contains(needle))
-        && start.elapsed() < Duration::from_secs(10)
-    {
+    while !done(h.state()) && start.elapsed() < Duration::from_secs(10) {
         h.step();
         std::thread::sleep(Duration::from_millis(10));
     }
+}
+
+/// Steps the app until its status line mentions `needle`; returns the status line.
+fn wait_for_status(h: &mut Harness<'static, GuavaApp>, needle: &str) -> String {
+    wait_until(h, |app| app.status().is_some_and(|s| s.contains(needle)));
     h.state().status().unwrap_or_default().to_string()
 }
 
@@ -180,16 +176,9 @@ fn body_templates_open_by_file_and_bad_ones_keep_the_current_body() {
     let good = dir.join("copy.glb");
     std::fs::write(&good, glb).expect("write");
     h.state_mut().open(good);
-    let start = Instant::now();
-    while h
-        .state()
-        .body_label()
-        .is_none_or(|l| !l.contains("copy.glb"))
-        && start.elapsed() < Duration::from_secs(10)
-    {
-        h.step();
-        std::thread::sleep(Duration::from_millis(10));
-    }
+    wait_until(&mut h, |app| {
+        app.body_label().is_some_and(|l| l.contains("copy.glb"))
+    });
     assert!(
         h.state()
             .body_label()
