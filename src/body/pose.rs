@@ -4,9 +4,10 @@
 //! target coefficients, chain world-aligned joint frames G_j = G_parent·[R_j | J_j − J_parent],
 //! remove the rest placement (A_j = G_j·T(−J_j)), blend A_j by the skin weights per vertex.
 
-use glam::{Affine3A, Mat3A, Quat, Vec3, Vec3A};
+use glam::{Affine3A, Mat3A, Vec3};
 
 use super::BodyModel;
+use super::lbs::{blend, rigid_chain, rodrigues};
 
 /// Pose parameters, indexed like the model's joints and targets; set them by name.
 #[derive(Clone, Debug, PartialEq)]
@@ -24,8 +25,8 @@ pub struct BodyPose {
 pub enum PoseError {
     #[error("the body has no joint named {0:?}")]
     UnknownJoint(String),
-    #[error("the body has no target named {0:?}")]
-    UnknownTarget(String),
+    #[error("the body has no parameter named {0:?}")]
+    UnknownParameter(String),
     #[error("pose has {got} {what} for a body with {expected}")]
     WrongLength {
         what: &'static str,
@@ -34,24 +35,36 @@ pub enum PoseError {
     },
 }
 
+/// What every body model offers: named joints and parameters in, a posed body out.
+pub trait Posable {
+    /// Joint names; a [`BodyPose`] has one rotation per joint in this order.
+    fn joint_names(&self) -> impl ExactSizeIterator<Item = &str>;
+    /// Parameter (coefficient) names; a [`BodyPose`] has one coefficient per name in this order.
+    fn parameter_names(&self) -> impl ExactSizeIterator<Item = &str>;
+    fn triangles(&self) -> &[[u32; 3]];
+    /// Poses into `out` (reused across frames). Non-finite inputs are treated as zero and counted.
+    fn pose(&self, pose: &BodyPose, out: &mut PosedBody) -> Result<(), PoseError>;
+}
+
 impl BodyPose {
     /// The rest pose: no rotation, no translation, all coefficients zero.
-    pub fn rest(model: &BodyModel) -> Self {
+    pub fn rest(model: &impl Posable) -> Self {
         Self {
             translation: Vec3::ZERO,
-            rotations: vec![Vec3::ZERO; model.joints.len()],
-            coefficients: vec![0.0; model.targets.len()],
+            rotations: vec![Vec3::ZERO; model.joint_names().len()],
+            coefficients: vec![0.0; model.parameter_names().len()],
         }
     }
 
     pub fn set_rotation(
         &mut self,
-        model: &BodyModel,
+        model: &impl Posable,
         joint: &str,
         axis_angle: Vec3,
     ) -> Result<(), PoseError> {
         let j = model
-            .joint_index(joint)
+            .joint_names()
+            .position(|n| n == joint)
             .ok_or_else(|| PoseError::UnknownJoint(joint.into()))?;
         self.rotations[j] = axis_angle;
         Ok(())
@@ -59,14 +72,32 @@ impl BodyPose {
 
     pub fn set_coefficient(
         &mut self,
-        model: &BodyModel,
-        target: &str,
+        model: &impl Posable,
+        name: &str,
         value: f32,
     ) -> Result<(), PoseError> {
         let t = model
-            .target_index(target)
-            .ok_or_else(|| PoseError::UnknownTarget(target.into()))?;
+            .parameter_names()
+            .position(|n| n == name)
+            .ok_or_else(|| PoseError::UnknownParameter(name.into()))?;
         self.coefficients[t] = value;
+        Ok(())
+    }
+
+    /// Checks the lengths against a model with `joints` joints and `parameters` parameters.
+    pub(crate) fn check_lengths(&self, joints: usize, parameters: usize) -> Result<(), PoseError> {
+        for (what, got, expected) in [
+            ("rotations", self.rotations.len(), joints),
+            ("coefficients", self.coefficients.len(), parameters),
+        ] {
+            if got != expected {
+                return Err(PoseError::WrongLength {
+                    what,
+                    got,
+                    expected,
+                });
+            }
+        }
         Ok(())
     }
 }
@@ -86,16 +117,11 @@ pub struct PosedBody {
     pub nonfinite_inputs: usize,
 }
 
-/// Rotation matrix of an axis-angle vector; non-finite input is counted and treated as zero.
-fn rotation(axis_angle: Vec3, nonfinite: &mut usize) -> Mat3A {
-    if !axis_angle.is_finite() || !axis_angle.length_squared().is_finite() {
-        *nonfinite += 1;
-        return Mat3A::IDENTITY;
-    }
-    Mat3A::from_quat(Quat::from_scaled_axis(axis_angle))
-}
-
-fn finite_or_zero<T: Copy + Default>(value: T, finite: bool, nonfinite: &mut usize) -> T {
+pub(crate) fn finite_or_zero<T: Copy + Default>(
+    value: T,
+    finite: bool,
+    nonfinite: &mut usize,
+) -> T {
     if finite {
         value
     } else {
@@ -109,18 +135,7 @@ impl BodyModel {
     /// `out.nonfinite_inputs`, so the output is always finite for finite assets.
     pub fn pose(&self, pose: &BodyPose, out: &mut PosedBody) -> Result<(), PoseError> {
         let joint_count = self.joints.len();
-        for (what, got, expected) in [
-            ("rotations", pose.rotations.len(), joint_count),
-            ("coefficients", pose.coefficients.len(), self.targets.len()),
-        ] {
-            if got != expected {
-                return Err(PoseError::WrongLength {
-                    what,
-                    got,
-                    expected,
-                });
-            }
-        }
+        pose.check_lengths(joint_count, self.targets.len())?;
         let mut nonfinite = 0;
 
         // Morphs: rest mesh and joints plus the weighted target deltas.
@@ -141,32 +156,26 @@ impl BodyModel {
             }
         }
 
-        // Kinematic chain, then the rest placement removed: A_j = G_j · T(−J_j).
         let translation = finite_or_zero(
             pose.translation,
             pose.translation.is_finite(),
             &mut nonfinite,
         );
-        out.joints.clear();
+        let rotations: Vec<Mat3A> = pose
+            .rotations
+            .iter()
+            .map(|&r| rodrigues(r, &mut nonfinite))
+            .collect();
         let mut placements = Vec::with_capacity(joint_count);
-        for (j, joint) in self.joints.iter().enumerate() {
-            let rest = out.rest_joints[j];
-            let r = rotation(pose.rotations[j], &mut nonfinite);
-            let world = match joint.parent {
-                Some(p) => {
-                    out.joints[p]
-                        * Affine3A::from_mat3_translation(r.into(), rest - out.rest_joints[p])
-                }
-                None => Affine3A::from_mat3_translation(r.into(), rest + translation),
-            };
-            out.joints.push(world);
-            placements.push(Affine3A {
-                matrix3: world.matrix3,
-                translation: world.translation - world.matrix3 * Vec3A::from(rest),
-            });
-        }
+        rigid_chain(
+            self.joints.iter().map(|j| j.parent),
+            &out.rest_joints,
+            &rotations,
+            translation,
+            &mut out.joints,
+            &mut placements,
+        );
 
-        // Blend per vertex and apply.
         out.skin.clear();
         out.skin.reserve(self.vertices.len());
         for ((v, js), ws) in out
@@ -175,23 +184,30 @@ impl BodyModel {
             .zip(&self.skin_joints)
             .zip(&self.skin_weights)
         {
-            let mut blended = Affine3A {
-                matrix3: Mat3A::ZERO,
-                translation: Vec3A::ZERO,
-            };
-            for (&j, &w) in js.iter().zip(ws) {
-                if w != 0.0 {
-                    let a = &placements[j as usize];
-                    blended.matrix3.x_axis += w * a.matrix3.x_axis;
-                    blended.matrix3.y_axis += w * a.matrix3.y_axis;
-                    blended.matrix3.z_axis += w * a.matrix3.z_axis;
-                    blended.translation += w * a.translation;
-                }
-            }
-            *v = blended.transform_point3(*v);
-            out.skin.push(blended);
+            let influences = js.iter().zip(ws).filter(|(_, w)| **w != 0.0);
+            let skin = blend(influences.map(|(&j, &w)| (j as usize, w)), &placements);
+            *v = skin.transform_point3(*v);
+            out.skin.push(skin);
         }
         out.nonfinite_inputs = nonfinite;
         Ok(())
+    }
+}
+
+impl Posable for BodyModel {
+    fn joint_names(&self) -> impl ExactSizeIterator<Item = &str> {
+        self.joints.iter().map(|j| j.name.as_str())
+    }
+
+    fn parameter_names(&self) -> impl ExactSizeIterator<Item = &str> {
+        self.targets.iter().map(|t| t.name.as_str())
+    }
+
+    fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    fn pose(&self, pose: &BodyPose, out: &mut PosedBody) -> Result<(), PoseError> {
+        BodyModel::pose(self, pose, out)
     }
 }

@@ -106,7 +106,7 @@ impl BodyState {
             ui.checkbox(&mut self.shaded, "shaded");
             ui.checkbox(&mut self.wireframe, "wireframe");
             if ui.button("Rest pose").clicked() {
-                self.pose = BodyPose::rest(&self.model);
+                self.pose = BodyPose::rest(self.model.as_ref());
             }
         });
         let model = self.model.clone();

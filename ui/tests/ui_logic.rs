@@ -130,7 +130,7 @@ fn the_default_body_is_shown_and_re_posed_only_when_a_slider_moves() {
     let body = h.state_mut().body_mut().expect("default body");
     let model = body.model.clone();
     body.pose
-        .set_coefficient(&model, "jawOpen", 1.0)
+        .set_coefficient(model.as_ref(), "jawOpen", 1.0)
         .expect("target");
     frame(&mut h);
     assert_eq!(

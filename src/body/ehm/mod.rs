@@ -1,0 +1,381 @@
+//! EHM, GUAVA's body: SMPL-X with its head replaced by FLAME (reference
+//! `models/modules/ehm/EHM.py:EHM.forward`, digested in notes/guava-pipeline.md §3.4).
+//!
+//! The model comes from the user's registration-only SMPL-X and FLAME files through
+//! `tools/convert_ehm.py` (the reference constructor builds it, teeth included); [`EhmModel::load`]
+//! reads and validates that file. [`EhmModel::forward`] follows the reference step by step in f32;
+//! `tests/ehm.rs` checks it against the reference on a synthetic model to 1e-5 m.
+
+mod file;
+
+use glam::{Affine3A, Mat3A, Vec3};
+
+use super::lbs::{blend, rigid_chain, rodrigues};
+use super::pose::finite_or_zero;
+use super::{BodyPose, Posable, PoseError, PosedBody, SMPLX_JOINTS};
+
+pub use file::EHM_FORMAT;
+
+/// SMPL-X joints whose rotations EHM takes from the FLAME head instead (always zero on the body).
+const SMPLX_JAW: usize = 22;
+const SMPLX_EYES: [usize; 2] = [23, 24];
+/// FLAME joints: global, neck, jaw, left eye, right eye.
+const FLAME_JAW: usize = 2;
+const FLAME_EYES: [usize; 2] = [3, 4];
+
+/// One skinned mesh of EHM (the SMPL-X body or the FLAME head), laid out for posing.
+#[derive(Clone, Debug)]
+pub struct Skinned {
+    pub template: Vec<Vec3>,
+    /// Shape then expression directions, component-major: `dirs[c][3·v + axis]`.
+    pub shape_dirs: Vec<Vec<f32>>,
+    /// Pose correctives, row per (non-root joint, 3×3 entry): `pose_dirs[9·(j−1) + 3·row + col]`.
+    pub pose_dirs: Vec<Vec<f32>>,
+    /// Sparse joint regressor: per joint, (vertex, weight).
+    pub regressor: Vec<Vec<(u32, f32)>>,
+    pub parents: Vec<Option<usize>>,
+    /// Sparse skin weights: per vertex, (joint, weight).
+    pub weights: Vec<Vec<(u16, f32)>>,
+}
+
+/// The converted EHM (see `tools/convert_ehm.py` for the file layout).
+#[derive(Clone, Debug)]
+pub struct EhmModel {
+    pub name: String,
+    pub n_shape: usize,
+    pub n_exp: usize,
+    pub body: Skinned,
+    pub head: Skinned,
+    pub triangles: Vec<[u32; 3]>,
+    /// Per-corner texture coordinates (index into `texcoords`), v already flipped as the reference.
+    pub triangle_uvs: Vec<[u32; 3]>,
+    pub texcoords: Vec<glam::Vec2>,
+    /// FLAME vertex i is body vertex `head_vertices[i]` (teeth included).
+    pub head_vertices: Vec<u32>,
+    pub hands: [Vec<u32>; 2],
+    pub hand_centres: [Vec3; 2],
+    /// FLAME eyelid blendshapes, left then right.
+    pub eyelids: [Vec<Vec3>; 2],
+    /// Per-avatar identity used by [`Posable::pose`] (the tracker's `id_share_params`).
+    pub identity: EhmIdentity,
+    parameter_names: Vec<String>,
+}
+
+/// The per-avatar part of the tracking: joint offsets and head/hand scales.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EhmIdentity {
+    pub joints_offset: Vec<Vec3>,
+    pub head_scale: Vec3,
+    pub hand_scale: Vec3,
+}
+
+impl Default for EhmIdentity {
+    fn default() -> Self {
+        Self {
+            joints_offset: vec![Vec3::ZERO; SMPLX_JOINTS.len()],
+            head_scale: Vec3::ONE,
+            hand_scale: Vec3::ONE,
+        }
+    }
+}
+
+/// EHM parameters in the tracker's layout (`smplx_coeffs` + `flame_coeffs`, notes §2.1).
+/// Shape vectors shorter than `n_shape` are zero-padded, as the reference does.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EhmParams {
+    pub shape: Vec<f32>,
+    /// SMPL-X expression (enters the body's shape blend).
+    pub expression: Vec<f32>,
+    pub global_pose: Vec3,
+    pub body_pose: Vec<Vec3>,
+    pub left_hand_pose: Vec<Vec3>,
+    pub right_hand_pose: Vec<Vec3>,
+    pub flame_shape: Vec<f32>,
+    pub flame_expression: Vec<f32>,
+    pub jaw: Vec3,
+    /// Left then right eye.
+    pub eyes: [Vec3; 2],
+    /// Left then right eyelid.
+    pub eyelids: [f32; 2],
+    pub identity: EhmIdentity,
+}
+
+impl EhmParams {
+    pub fn rest(model: &EhmModel) -> Self {
+        Self {
+            shape: vec![0.0; model.n_shape],
+            expression: vec![0.0; model.n_exp],
+            global_pose: Vec3::ZERO,
+            body_pose: vec![Vec3::ZERO; 21],
+            left_hand_pose: vec![Vec3::ZERO; 15],
+            right_hand_pose: vec![Vec3::ZERO; 15],
+            flame_shape: vec![0.0; model.n_shape],
+            flame_expression: vec![0.0; model.n_exp],
+            jaw: Vec3::ZERO,
+            eyes: [Vec3::ZERO; 2],
+            eyelids: [0.0; 2],
+            identity: EhmIdentity::default(),
+        }
+    }
+}
+
+/// Intermediate results of a forward pass, kept for inspection and tests.
+#[derive(Clone, Debug, Default)]
+pub struct EhmExtras {
+    /// Posed FLAME head before it is placed on the body (after eyelids and head scale).
+    pub head_vertices: Vec<Vec3>,
+    /// Skinning placements A_j of the body joints (`joint_transform_mat`).
+    pub placements: Vec<Affine3A>,
+}
+
+impl Skinned {
+    /// template + Σ c·dirs[c] over the given coefficients (zeros skipped).
+    fn shaped(&self, coefficients: &[f32], out: &mut Vec<Vec3>) {
+        out.clear();
+        out.extend_from_slice(&self.template);
+        let flat: &mut [f32] = bytemuck::cast_slice_mut(out.as_mut_slice());
+        for (dir, &c) in self.shape_dirs.iter().zip(coefficients) {
+            if c != 0.0 {
+                axpy(c, dir, flat);
+            }
+        }
+    }
+
+    fn regress(&self, vertices: &[Vec3]) -> Vec<Vec3> {
+        self.regressor
+            .iter()
+            .map(|row| row.iter().map(|&(v, w)| w * vertices[v as usize]).sum())
+            .collect()
+    }
+
+    /// The reference `lbs_wobeta` on an already shaped template: joints regressed from it (plus
+    /// offsets), pose correctives from (R_j − I) of every non-root joint, rigid chain, skinning.
+    fn skin(
+        &self,
+        shaped: &[Vec3],
+        rotations: &[Mat3A],
+        joints_offset: Option<&[Vec3]>,
+        out: &mut PosedBody,
+        placements: &mut Vec<Affine3A>,
+    ) {
+        let mut rest = self.regress(shaped);
+        if let Some(offsets) = joints_offset {
+            rest.iter_mut().zip(offsets).for_each(|(j, o)| *j += *o);
+        }
+        out.vertices.clear();
+        out.vertices.extend_from_slice(shaped);
+        let flat: &mut [f32] = bytemuck::cast_slice_mut(out.vertices.as_mut_slice());
+        for (j, r) in rotations.iter().enumerate().skip(1) {
+            let feature = *r - Mat3A::IDENTITY;
+            for row in 0..3 {
+                for col in 0..3 {
+                    let c = feature.col(col)[row];
+                    if c != 0.0 {
+                        axpy(c, &self.pose_dirs[9 * (j - 1) + 3 * row + col], flat);
+                    }
+                }
+            }
+        }
+        rigid_chain(
+            self.parents.iter().copied(),
+            &rest,
+            rotations,
+            Vec3::ZERO,
+            &mut out.joints,
+            placements,
+        );
+        out.skin.clear();
+        for (v, weights) in out.vertices.iter_mut().zip(&self.weights) {
+            let skin = blend(weights.iter().map(|&(j, w)| (j as usize, w)), placements);
+            *v = skin.transform_point3(*v);
+            out.skin.push(skin);
+        }
+        out.rest_joints = rest;
+    }
+}
+
+fn axpy(c: f32, x: &[f32], y: &mut [f32]) {
+    for (y, x) in y.iter_mut().zip(x) {
+        *y += c * x;
+    }
+}
+
+/// `values` zero-padded or cut to `n`, non-finite entries zeroed and counted.
+fn padded(values: &[f32], n: usize, nonfinite: &mut usize) -> Vec<f32> {
+    let mut out: Vec<f32> = values
+        .iter()
+        .take(n)
+        .map(|&x| finite_or_zero(x, x.is_finite(), nonfinite))
+        .collect();
+    out.resize(n, 0.0);
+    out
+}
+
+fn finite_vec(v: Vec3, nonfinite: &mut usize) -> Vec3 {
+    finite_or_zero(v, v.is_finite(), nonfinite)
+}
+
+impl EhmModel {
+    /// The reference `EHM.forward` (GUAVA's inference path). `out.joints` are the posed body
+    /// joint frames, `out.rest_joints` the rest joints with offsets (`joints`), `out.skin` the
+    /// per-vertex `ver_transform_mat`. Non-finite inputs are zeroed (scales: set to 1) and counted.
+    pub fn forward(&self, p: &EhmParams, out: &mut PosedBody, extras: &mut EhmExtras) {
+        let mut nonfinite = 0;
+
+        // Head: FLAME with zero global and neck rotation, jaw and eyes from the tracking.
+        let mut head_rotations = [Mat3A::IDENTITY; 5];
+        head_rotations[FLAME_JAW] = rodrigues(p.jaw, &mut nonfinite);
+        for (&j, &eye) in FLAME_EYES.iter().zip(&p.eyes) {
+            head_rotations[j] = rodrigues(eye, &mut nonfinite);
+        }
+        let mut betas = padded(&p.flame_shape, self.n_shape, &mut nonfinite);
+        betas.extend(padded(&p.flame_expression, self.n_exp, &mut nonfinite));
+        let mut shaped = Vec::new();
+        self.head.shaped(&betas, &mut shaped);
+        let mut head = PosedBody::default();
+        let mut head_placements = Vec::new();
+        self.head.skin(
+            &shaped,
+            &head_rotations,
+            None,
+            &mut head,
+            &mut head_placements,
+        );
+        let eyelids = p
+            .eyelids
+            .map(|e| finite_or_zero(e, e.is_finite(), &mut nonfinite));
+        let head_scale = self.scale(p.identity.head_scale, &mut nonfinite);
+        extras.head_vertices.clear();
+        extras
+            .head_vertices
+            .extend(head.vertices.iter().enumerate().map(|(i, &v)| {
+                (v + self.eyelids[1][i] * eyelids[1] + self.eyelids[0][i] * eyelids[0]) * head_scale
+            }));
+        let head_eyes =
+            (head.joints[FLAME_EYES[0]].translation + head.joints[FLAME_EYES[1]].translation) / 2.0;
+
+        // Body: shape + expression blend, joints with offsets, the head swapped in.
+        let mut components = padded(&p.shape, self.n_shape, &mut nonfinite);
+        components.extend(padded(&p.expression, self.n_exp, &mut nonfinite));
+        self.body.shaped(&components, &mut shaped);
+        let offsets: Vec<Vec3> = (0..SMPLX_JOINTS.len())
+            .map(|j| {
+                let o = p.identity.joints_offset.get(j).copied().unwrap_or_default();
+                finite_vec(o, &mut nonfinite)
+            })
+            .collect();
+        let joints9: Vec<Vec3> = self
+            .body
+            .regress(&shaped)
+            .iter()
+            .zip(&offsets)
+            .map(|(j, o)| *j + *o)
+            .collect();
+        let shift = (joints9[SMPLX_EYES[0]] + joints9[SMPLX_EYES[1]]) / 2.0 - Vec3::from(head_eyes);
+        for (&b, &h) in self.head_vertices.iter().zip(&extras.head_vertices) {
+            shaped[b as usize] = h + shift;
+        }
+        let hand_scale = self.scale(p.identity.hand_scale, &mut nonfinite);
+        for (hand, centre) in self.hands.iter().zip(self.hand_centres) {
+            for &v in hand {
+                let v = &mut shaped[v as usize];
+                *v = *v * hand_scale + (Vec3::ONE - hand_scale) * centre;
+            }
+        }
+
+        // Pose: global, 21 body joints, jaw and eyes zero (they live in the head), 2 × 15 hand joints.
+        let mut rotations = vec![Mat3A::IDENTITY; SMPLX_JOINTS.len()];
+        let posed = [
+            (0, std::slice::from_ref(&p.global_pose)),
+            (1, &p.body_pose[..p.body_pose.len().min(SMPLX_JAW - 1)]),
+            (25, &p.left_hand_pose[..p.left_hand_pose.len().min(15)]),
+            (40, &p.right_hand_pose[..p.right_hand_pose.len().min(15)]),
+        ];
+        for (first, values) in posed {
+            for (r, &v) in rotations[first..].iter_mut().zip(values) {
+                *r = rodrigues(v, &mut nonfinite);
+            }
+        }
+        self.body.skin(
+            &shaped,
+            &rotations,
+            Some(&offsets),
+            out,
+            &mut extras.placements,
+        );
+        out.nonfinite_inputs = nonfinite;
+    }
+
+    /// A scale vector, non-finite components replaced by 1 and counted.
+    fn scale(&self, s: Vec3, nonfinite: &mut usize) -> Vec3 {
+        if s.is_finite() {
+            s
+        } else {
+            *nonfinite += 1;
+            Vec3::select(s.is_finite_mask(), s, Vec3::ONE)
+        }
+    }
+
+    /// Maps a named [`BodyPose`] to EHM parameters: joints are SMPL-X's 55 (the root is the
+    /// global orientation; `jaw` and the eyes drive FLAME's jaw and eyes, which is where EHM
+    /// takes them from), coefficients by [`Posable::parameter_names`], identity from `self`.
+    pub fn params_from_pose(&self, pose: &BodyPose) -> Result<EhmParams, PoseError> {
+        pose.check_lengths(SMPLX_JOINTS.len(), self.parameter_names.len())?;
+        let r = &pose.rotations;
+        let (s, e) = (self.n_shape, self.n_exp);
+        let c = &pose.coefficients;
+        Ok(EhmParams {
+            shape: c[..s].to_vec(),
+            expression: c[s..s + e].to_vec(),
+            global_pose: r[0],
+            body_pose: r[1..SMPLX_JAW].to_vec(),
+            left_hand_pose: r[25..40].to_vec(),
+            right_hand_pose: r[40..55].to_vec(),
+            flame_shape: c[s + e..2 * s + e].to_vec(),
+            flame_expression: c[2 * s + e..2 * s + 2 * e].to_vec(),
+            jaw: r[SMPLX_JAW],
+            eyes: SMPLX_EYES.map(|j| r[j]),
+            eyelids: [c[2 * s + 2 * e], c[2 * s + 2 * e + 1]],
+            identity: self.identity.clone(),
+        })
+    }
+
+    fn make_parameter_names(n_shape: usize, n_exp: usize) -> Vec<String> {
+        let numbered =
+            |prefix: &'static str, n: usize| (0..n).map(move |i| format!("{prefix}{i:03}"));
+        numbered("shape_", n_shape)
+            .chain(numbered("expression_", n_exp))
+            .chain(numbered("flame_shape_", n_shape))
+            .chain(numbered("flame_expression_", n_exp))
+            .chain(["eyelid_left".to_owned(), "eyelid_right".to_owned()])
+            .collect()
+    }
+}
+
+impl Posable for EhmModel {
+    fn joint_names(&self) -> impl ExactSizeIterator<Item = &str> {
+        SMPLX_JOINTS.iter().copied()
+    }
+
+    fn parameter_names(&self) -> impl ExactSizeIterator<Item = &str> {
+        self.parameter_names.iter().map(String::as_str)
+    }
+
+    fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// [`EhmModel::forward`] on the mapped parameters, then the pose's translation.
+    fn pose(&self, pose: &BodyPose, out: &mut PosedBody) -> Result<(), PoseError> {
+        let params = self.params_from_pose(pose)?;
+        self.forward(&params, out, &mut EhmExtras::default());
+        let mut nonfinite = out.nonfinite_inputs;
+        let t = finite_vec(pose.translation, &mut nonfinite);
+        let shift = Affine3A::from_translation(t);
+        out.vertices.iter_mut().for_each(|v| *v += t);
+        out.skin.iter_mut().for_each(|s| *s = shift * *s);
+        out.joints.iter_mut().for_each(|j| *j = shift * *j);
+        out.nonfinite_inputs = nonfinite;
+        Ok(())
+    }
+}
