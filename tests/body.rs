@@ -360,6 +360,75 @@ fn pose_errors_name_the_problem() {
 }
 
 #[test]
+fn landmarks_and_parts_sit_where_anatomy_puts_them() {
+    let model = body();
+    let names: Vec<&str> = model.landmarks.iter().map(|l| l.name.as_str()).collect();
+    assert_eq!(names.len(), 23, "COCO-WholeBody body + feet: {names:?}");
+    let rest = model.landmark_positions(&model.vertices);
+    let at = |name: &str| rest[names.iter().position(|n| *n == name).expect(name)];
+    for (name, p) in names.iter().zip(&rest) {
+        if name.starts_with("left_") {
+            assert!(p.x > 0.01, "{name} {p} should be on the body's left (+x)");
+        } else if name.starts_with("right_") {
+            assert!(p.x < -0.01, "{name} {p} should be on the right");
+        }
+    }
+    let heights = [
+        "left_eye",
+        "nose",
+        "left_shoulder",
+        "left_elbow",
+        "left_hip",
+        "left_knee",
+    ];
+    for pair in heights.windows(2) {
+        assert!(
+            at(pair[0]).y > at(pair[1]).y,
+            "{} above {}",
+            pair[0],
+            pair[1]
+        );
+    }
+    let wrist = model.joints[model.joint_index("wrist.L").expect("wrist")].rest;
+    assert!(
+        at("left_wrist").distance(wrist) < 0.05,
+        "left wrist keypoint near the wrist joint"
+    );
+
+    // Landmarks are carried by the posed mesh.
+    let mut pose = BodyPose::rest(&model);
+    pose.set_rotation(&model, "lowerarm01.L", Vec3::new(0.0, 0.0, 1.2))
+        .expect("joint");
+    let posed = posed(&model, &pose);
+    let moved = model.landmark_positions(&posed.vertices);
+    let wrist_index = names
+        .iter()
+        .position(|n| *n == "left_wrist")
+        .expect("wrist");
+    assert!(moved[wrist_index].distance(rest[wrist_index]) > 0.05);
+    assert!(moved[0].distance(rest[0]) < 1e-6, "the nose stays");
+
+    assert_eq!(model.vertex_parts.len(), model.vertices.len());
+    let part = |name: &str| model.part_names.iter().position(|n| n == name).expect(name) as u8;
+    let neck = model.joints[model.joint_index("neck01").expect("neck")].rest;
+    for (v, &p) in model.vertices.iter().zip(&model.vertex_parts) {
+        if p == part("hand.L") {
+            assert!(v.x > 0.3, "left-hand vertex {v}");
+        } else if p == part("hand.R") {
+            assert!(v.x < -0.3, "right-hand vertex {v}");
+        } else if p == part("head") {
+            assert!(v.y > neck.y, "head vertex {v} below the neck joint");
+        }
+    }
+    for (i, name) in model.part_names.iter().enumerate() {
+        assert!(
+            model.vertex_parts.contains(&(i as u8)),
+            "part {name} has vertices"
+        );
+    }
+}
+
+#[test]
 fn smplx_names_map_onto_the_default_rig() {
     let m = body();
     let mut unmapped = Vec::new();
@@ -407,9 +476,10 @@ fn edited_glb(edit: impl FnOnce(&mut serde_json::Value)) -> Vec<u8> {
 }
 
 fn load_error(bytes: &[u8]) -> String {
-    BodyModel::from_glb(bytes, "bad.glb")
-        .expect_err("must be rejected")
-        .to_string()
+    match BodyModel::from_glb(bytes, "bad.glb") {
+        Ok(_) => panic!("a malformed asset loaded"),
+        Err(e) => e.to_string(),
+    }
 }
 
 #[test]
@@ -465,6 +535,34 @@ fn malformed_assets_are_errors_naming_file_and_problem() {
         (
             edited_glb(|j| j["buffers"][0]["byteLength"] = (glb.len() * 2).into()),
             "BIN chunk",
+        ),
+        (
+            edited_glb(|j| {
+                let counts = &mut j.pointer_mut(extras).expect("x")["landmarks"]["counts"];
+                let (first, second) = (
+                    counts[0].as_u64().expect("n"),
+                    counts[1].as_u64().expect("n"),
+                );
+                counts[0] = (first / 2).into();
+                counts[1] = (second + first - first / 2).into();
+            }),
+            "landmark nose: weights sum to",
+        ),
+        (
+            edited_glb(|j| {
+                let body = j.pointer_mut(extras).expect("x");
+                body["landmarks"]["weights"] = body["weld"].clone();
+            }),
+            "landmarks.weights must be a SCALAR F32 accessor",
+        ),
+        (
+            edited_glb(|j| {
+                let names = j.pointer_mut(extras).expect("x")["parts"]["names"]
+                    .as_array_mut()
+                    .expect("names");
+                names.truncate(1);
+            }),
+            "but only 1 parts are named",
         ),
     ];
     for (bytes, expected) in cases {

