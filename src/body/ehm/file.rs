@@ -79,6 +79,7 @@ impl EhmModel {
             eyelids: [eyelid("flame_l_eyelid")?, eyelid("flame_r_eyelid")?],
             identity: EhmIdentity::default(),
             parameter_names: Self::make_parameter_names(n_shape, n_exp),
+            shape_caches: Default::default(),
             body,
             head,
         })

@@ -59,6 +59,7 @@ pub struct EhmModel {
     /// Per-avatar identity used by [`Posable::pose`] (the tracker's `id_share_params`).
     pub identity: EhmIdentity,
     parameter_names: Vec<String>,
+    shape_caches: ShapeCaches,
 }
 
 /// The per-avatar part of the tracking: joint offsets and head/hand scales.
@@ -128,13 +129,51 @@ pub struct EhmExtras {
     pub placements: Vec<Affine3A>,
 }
 
+/// The identity part of a shape blend (template + shape directions), kept while the shape
+/// coefficients stay the same: during playback only expressions change, and the blend is summed
+/// in the same order either way, so cached and fresh results are bit-identical.
+#[derive(Debug, Default)]
+struct ShapeCache {
+    key: Vec<f32>,
+    shaped: Vec<Vec3>,
+}
+
+/// One cache per mesh behind a lock, so posing through `&self` can reuse it.
+#[derive(Debug, Default)]
+struct ShapeCaches([std::sync::Mutex<ShapeCache>; 2]);
+
+impl Clone for ShapeCaches {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
 impl Skinned {
-    /// template + Σ c·dirs[c] over the given coefficients (zeros skipped).
-    fn shaped(&self, coefficients: &[f32], out: &mut Vec<Vec3>) {
+    /// template + Σ s·shape_dirs + Σ e·expression_dirs (zeros skipped), the shape part cached.
+    fn shaped(
+        &self,
+        shape: &[f32],
+        expression: &[f32],
+        cache: &std::sync::Mutex<ShapeCache>,
+        out: &mut Vec<Vec3>,
+    ) {
+        let mut cache = cache
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if cache.key != shape || cache.shaped.len() != self.template.len() {
+            cache.key = shape.to_vec();
+            cache.shaped = self.template.clone();
+            let flat: &mut [f32] = bytemuck::cast_slice_mut(cache.shaped.as_mut_slice());
+            for (dir, &c) in self.shape_dirs.iter().zip(shape) {
+                if c != 0.0 {
+                    axpy(c, dir, flat);
+                }
+            }
+        }
         out.clear();
-        out.extend_from_slice(&self.template);
+        out.extend_from_slice(&cache.shaped);
         let flat: &mut [f32] = bytemuck::cast_slice_mut(out.as_mut_slice());
-        for (dir, &c) in self.shape_dirs.iter().zip(coefficients) {
+        for (dir, &c) in self.shape_dirs[shape.len()..].iter().zip(expression) {
             if c != 0.0 {
                 axpy(c, dir, flat);
             }
@@ -228,10 +267,12 @@ impl EhmModel {
         for (&j, &eye) in FLAME_EYES.iter().zip(&p.eyes) {
             head_rotations[j] = rodrigues(eye, &mut nonfinite);
         }
-        let mut betas = padded(&p.flame_shape, self.n_shape, &mut nonfinite);
-        betas.extend(padded(&p.flame_expression, self.n_exp, &mut nonfinite));
+        let shape = padded(&p.flame_shape, self.n_shape, &mut nonfinite);
+        let expression = padded(&p.flame_expression, self.n_exp, &mut nonfinite);
         let mut shaped = Vec::new();
-        self.head.shaped(&betas, &mut shaped);
+        let [body_cache, head_cache] = &self.shape_caches.0;
+        self.head
+            .shaped(&shape, &expression, head_cache, &mut shaped);
         let mut head = PosedBody::default();
         let mut head_placements = Vec::new();
         self.head.skin(
@@ -255,9 +296,10 @@ impl EhmModel {
             (head.joints[FLAME_EYES[0]].translation + head.joints[FLAME_EYES[1]].translation) / 2.0;
 
         // Body: shape + expression blend, joints with offsets, the head swapped in.
-        let mut components = padded(&p.shape, self.n_shape, &mut nonfinite);
-        components.extend(padded(&p.expression, self.n_exp, &mut nonfinite));
-        self.body.shaped(&components, &mut shaped);
+        let shape = padded(&p.shape, self.n_shape, &mut nonfinite);
+        let expression = padded(&p.expression, self.n_exp, &mut nonfinite);
+        self.body
+            .shaped(&shape, &expression, body_cache, &mut shaped);
         let offsets: Vec<Vec3> = (0..SMPLX_JOINTS.len())
             .map(|j| {
                 let o = p.identity.joints_offset.get(j).copied().unwrap_or_default();
