@@ -53,6 +53,7 @@ fn params(npz: &Npz, k: usize) -> EhmParams {
             head_scale: v3("body_head_scale"),
             hand_scale: v3("body_hand_scale"),
         },
+        translation: Vec3::ZERO,
     }
 }
 

@@ -32,7 +32,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from convert_ehm import build_reference_ehm, ehm_arrays, write_npz  # noqa: E402
-from reference_env import import_guava  # noqa: E402
+from reference_env import import_guava, read_obj  # noqa: E402
 
 SEED = 20251123
 # SMPL-X's kinematic tree (kintree_table[0] of SMPLX_NEUTRAL_2020.npz).
@@ -49,19 +49,6 @@ TRANSFORM_STRIDE = 5  # per-vertex transforms are saved for every 5th vertex
 
 def quantized(rng, shape, scale):
     return rng.integers(-16, 17, size=shape) / 16.0 * scale
-
-
-def obj_vertices(path):
-    rows = [line.split()[1:4] for line in Path(path).read_text().splitlines() if line.startswith("v ")]
-    return np.array(rows, dtype=np.float64)
-
-
-def obj_faces(path):
-    faces = []
-    for line in Path(path).read_text().splitlines():
-        if line.startswith("f "):
-            faces.append([int(c.split("/")[0]) - 1 for c in line.split()[1:4]])
-    return np.array(faces, dtype=np.int64)
 
 
 def directions(rng, vertex_count, components, scale):
@@ -97,7 +84,7 @@ def write_synthetic_assets(guava_root, dest, rng):
     shutil.copytree(guava_root / "assets" / "SMPLX", dest / "SMPLX")
     shutil.copytree(guava_root / "assets" / "FLAME", dest / "FLAME")
 
-    v = obj_vertices(dest / "SMPLX" / "smplx_uv.obj")
+    v = read_obj(dest / "SMPLX" / "smplx_uv.obj")[0]
     vc = len(v)
     np.savez(
         dest / "SMPLX" / "SMPLX_NEUTRAL_2020.npz",
@@ -116,14 +103,13 @@ def write_synthetic_assets(guava_root, dest, rng):
     with open(dest / "SMPLX" / "SMPLX_to_J14.pkl", "wb") as f:
         pickle.dump(joint_regressor(rng, 14, vc, 4), f, protocol=2)
 
-    template = dest / "FLAME" / "head_template.obj"
-    fv = obj_vertices(template)
+    fv, _, faces, _ = read_obj(dest / "FLAME" / "head_template.obj")
     fc = len(fv)
     (dest / "FLAME" / "FLAME2020").mkdir()
     with open(dest / "FLAME" / "FLAME2020" / "generic_model.pkl", "wb") as f:
         pickle.dump(
             {
-                "f": obj_faces(template),
+                "f": faces,
                 "v_template": fv,
                 "shapedirs": directions(rng, fc, SHAPE_COMPONENTS + EXPRESSION_COMPONENTS, 2.0**-7),
                 "posedirs": pose_correctives(rng, fc, 4, 10, 2.0**-6),

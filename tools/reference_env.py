@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 
 
-def _load_obj(path, load_textures=True):
-    import torch
-
+def read_obj(path):
+    """Vertices [V,3] f64, texture coordinates [T,2] f64, and per triangle its vertex and
+    texture-coordinate ids [F,3] (0-based; -1 where a corner has none)."""
     verts, uvs, faces_v, faces_t = [], [], [], []
     for line in Path(path).read_text().splitlines():
         parts = line.split()
@@ -33,9 +33,16 @@ def _load_obj(path, load_textures=True):
             corners = [p.split("/") for p in parts[1:4]]
             faces_v.append([int(c[0]) - 1 for c in corners])
             faces_t.append([int(c[1]) - 1 if len(c) > 1 and c[1] else -1 for c in corners])
+    return (np.array(verts), np.array(uvs), np.array(faces_v, dtype=np.int64),
+            np.array(faces_t, dtype=np.int64))
+
+
+def _load_obj(path, load_textures=True):
+    import torch
+
+    verts, uvs, faces_v, faces_t = read_obj(path)
     faces = types.SimpleNamespace(
-        verts_idx=torch.tensor(faces_v, dtype=torch.int64),
-        textures_idx=torch.tensor(faces_t, dtype=torch.int64),
+        verts_idx=torch.from_numpy(faces_v), textures_idx=torch.from_numpy(faces_t)
     )
     aux = types.SimpleNamespace(verts_uvs=torch.tensor(uvs, dtype=torch.float32))
     return torch.tensor(verts, dtype=torch.float32), faces, aux

@@ -162,7 +162,9 @@ impl ViewportResources {
             self.mesh
                 .set_topology(device, body.positions.len(), &body.triangles);
             self.mesh_topology = Some(body.topology);
+            // A new body: its first pose generation may equal the old body's last one.
             self.mesh_uploaded = None;
+            self.mesh_last = None;
         }
         if self.mesh_uploaded != Some(body.pose) {
             self.mesh

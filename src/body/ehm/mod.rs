@@ -16,6 +16,12 @@ use super::{BodyPose, Posable, PoseError, PosedBody, SMPLX_JOINTS};
 
 pub use file::EHM_FORMAT;
 
+/// SMPL-X joint layout: root, 21 body joints, jaw, two eyes, then 15 joints per hand.
+const SMPLX_BODY: usize = 1;
+const BODY_JOINTS: usize = 21;
+const SMPLX_LEFT_HAND: usize = 25;
+const SMPLX_RIGHT_HAND: usize = 40;
+const HAND_JOINTS: usize = 15;
 /// SMPL-X joints whose rotations EHM takes from the FLAME head instead (always zero on the body).
 const SMPLX_JAW: usize = 22;
 const SMPLX_EYES: [usize; 2] = [23, 24];
@@ -99,6 +105,8 @@ pub struct EhmParams {
     /// Left then right eyelid.
     pub eyelids: [f32; 2],
     pub identity: EhmIdentity,
+    /// Added to every posed point (metres). Not part of the reference, where it is always zero.
+    pub translation: Vec3,
 }
 
 impl EhmParams {
@@ -107,15 +115,16 @@ impl EhmParams {
             shape: vec![0.0; model.n_shape],
             expression: vec![0.0; model.n_exp],
             global_pose: Vec3::ZERO,
-            body_pose: vec![Vec3::ZERO; 21],
-            left_hand_pose: vec![Vec3::ZERO; 15],
-            right_hand_pose: vec![Vec3::ZERO; 15],
+            body_pose: vec![Vec3::ZERO; BODY_JOINTS],
+            left_hand_pose: vec![Vec3::ZERO; HAND_JOINTS],
+            right_hand_pose: vec![Vec3::ZERO; HAND_JOINTS],
             flame_shape: vec![0.0; model.n_shape],
             flame_expression: vec![0.0; model.n_exp],
             jaw: Vec3::ZERO,
             eyes: [Vec3::ZERO; 2],
             eyelids: [0.0; 2],
             identity: EhmIdentity::default(),
+            translation: Vec3::ZERO,
         }
     }
 }
@@ -180,20 +189,28 @@ impl Skinned {
         }
     }
 
-    fn regress(&self, vertices: &[Vec3]) -> Vec<Vec3> {
-        self.regressor
+    fn regress_joint(&self, j: usize, vertices: &[Vec3]) -> Vec3 {
+        self.regressor[j]
             .iter()
-            .map(|row| row.iter().map(|&(v, w)| w * vertices[v as usize]).sum())
+            .map(|&(v, w)| w * vertices[v as usize])
+            .sum()
+    }
+
+    fn regress(&self, vertices: &[Vec3]) -> Vec<Vec3> {
+        (0..self.regressor.len())
+            .map(|j| self.regress_joint(j, vertices))
             .collect()
     }
 
     /// The reference `lbs_wobeta` on an already shaped template: joints regressed from it (plus
-    /// offsets), pose correctives from (R_j − I) of every non-root joint, rigid chain, skinning.
+    /// offsets), pose correctives from (R_j − I) of every non-root joint, rigid chain (the root
+    /// moved by `translation`), skinning.
     fn skin(
         &self,
         shaped: &[Vec3],
         rotations: &[Mat3A],
         joints_offset: Option<&[Vec3]>,
+        translation: Vec3,
         out: &mut PosedBody,
         placements: &mut Vec<Affine3A>,
     ) {
@@ -219,7 +236,7 @@ impl Skinned {
             self.parents.iter().copied(),
             &rest,
             rotations,
-            Vec3::ZERO,
+            translation,
             &mut out.joints,
             placements,
         );
@@ -254,6 +271,16 @@ fn finite_vec(v: Vec3, nonfinite: &mut usize) -> Vec3 {
     finite_or_zero(v, v.is_finite(), nonfinite)
 }
 
+/// A scale vector, non-finite components replaced by 1 and counted.
+fn finite_scale(s: Vec3, nonfinite: &mut usize) -> Vec3 {
+    if s.is_finite() {
+        s
+    } else {
+        *nonfinite += 1;
+        Vec3::select(s.is_finite_mask(), s, Vec3::ONE)
+    }
+}
+
 impl EhmModel {
     /// The reference `EHM.forward` (GUAVA's inference path). `out.joints` are the posed body
     /// joint frames, `out.rest_joints` the rest joints with offsets (`joints`), `out.skin` the
@@ -279,13 +306,14 @@ impl EhmModel {
             &shaped,
             &head_rotations,
             None,
+            Vec3::ZERO,
             &mut head,
             &mut head_placements,
         );
         let eyelids = p
             .eyelids
             .map(|e| finite_or_zero(e, e.is_finite(), &mut nonfinite));
-        let head_scale = self.scale(p.identity.head_scale, &mut nonfinite);
+        let head_scale = finite_scale(p.identity.head_scale, &mut nonfinite);
         extras.head_vertices.clear();
         extras
             .head_vertices
@@ -306,18 +334,13 @@ impl EhmModel {
                 finite_vec(o, &mut nonfinite)
             })
             .collect();
-        let joints9: Vec<Vec3> = self
-            .body
-            .regress(&shaped)
-            .iter()
-            .zip(&offsets)
-            .map(|(j, o)| *j + *o)
-            .collect();
-        let shift = (joints9[SMPLX_EYES[0]] + joints9[SMPLX_EYES[1]]) / 2.0 - Vec3::from(head_eyes);
+        // Only the eye joints of the shaped body (with offsets) place the head.
+        let [left, right] = SMPLX_EYES.map(|j| self.body.regress_joint(j, &shaped) + offsets[j]);
+        let shift = (left + right) / 2.0 - Vec3::from(head_eyes);
         for (&b, &h) in self.head_vertices.iter().zip(&extras.head_vertices) {
             shaped[b as usize] = h + shift;
         }
-        let hand_scale = self.scale(p.identity.hand_scale, &mut nonfinite);
+        let hand_scale = finite_scale(p.identity.hand_scale, &mut nonfinite);
         for (hand, centre) in self.hands.iter().zip(self.hand_centres) {
             for &v in hand {
                 let v = &mut shaped[v as usize];
@@ -329,33 +352,34 @@ impl EhmModel {
         let mut rotations = vec![Mat3A::IDENTITY; SMPLX_JOINTS.len()];
         let posed = [
             (0, std::slice::from_ref(&p.global_pose)),
-            (1, &p.body_pose[..p.body_pose.len().min(SMPLX_JAW - 1)]),
-            (25, &p.left_hand_pose[..p.left_hand_pose.len().min(15)]),
-            (40, &p.right_hand_pose[..p.right_hand_pose.len().min(15)]),
+            (
+                SMPLX_BODY,
+                &p.body_pose[..p.body_pose.len().min(BODY_JOINTS)],
+            ),
+            (
+                SMPLX_LEFT_HAND,
+                &p.left_hand_pose[..p.left_hand_pose.len().min(HAND_JOINTS)],
+            ),
+            (
+                SMPLX_RIGHT_HAND,
+                &p.right_hand_pose[..p.right_hand_pose.len().min(HAND_JOINTS)],
+            ),
         ];
         for (first, values) in posed {
             for (r, &v) in rotations[first..].iter_mut().zip(values) {
                 *r = rodrigues(v, &mut nonfinite);
             }
         }
+        let translation = finite_vec(p.translation, &mut nonfinite);
         self.body.skin(
             &shaped,
             &rotations,
             Some(&offsets),
+            translation,
             out,
             &mut extras.placements,
         );
         out.nonfinite_inputs = nonfinite;
-    }
-
-    /// A scale vector, non-finite components replaced by 1 and counted.
-    fn scale(&self, s: Vec3, nonfinite: &mut usize) -> Vec3 {
-        if s.is_finite() {
-            s
-        } else {
-            *nonfinite += 1;
-            Vec3::select(s.is_finite_mask(), s, Vec3::ONE)
-        }
     }
 
     /// Maps a named [`BodyPose`] to EHM parameters: joints are SMPL-X's 55 (the root is the
@@ -370,15 +394,16 @@ impl EhmModel {
             shape: c[..s].to_vec(),
             expression: c[s..s + e].to_vec(),
             global_pose: r[0],
-            body_pose: r[1..SMPLX_JAW].to_vec(),
-            left_hand_pose: r[25..40].to_vec(),
-            right_hand_pose: r[40..55].to_vec(),
+            body_pose: r[SMPLX_BODY..SMPLX_BODY + BODY_JOINTS].to_vec(),
+            left_hand_pose: r[SMPLX_LEFT_HAND..SMPLX_LEFT_HAND + HAND_JOINTS].to_vec(),
+            right_hand_pose: r[SMPLX_RIGHT_HAND..SMPLX_RIGHT_HAND + HAND_JOINTS].to_vec(),
             flame_shape: c[s + e..2 * s + e].to_vec(),
             flame_expression: c[2 * s + e..2 * s + 2 * e].to_vec(),
             jaw: r[SMPLX_JAW],
             eyes: SMPLX_EYES.map(|j| r[j]),
             eyelids: [c[2 * s + 2 * e], c[2 * s + 2 * e + 1]],
             identity: self.identity.clone(),
+            translation: pose.translation,
         })
     }
 
@@ -407,17 +432,10 @@ impl Posable for EhmModel {
         &self.triangles
     }
 
-    /// [`EhmModel::forward`] on the mapped parameters, then the pose's translation.
+    /// [`EhmModel::forward`] on the mapped parameters.
     fn pose(&self, pose: &BodyPose, out: &mut PosedBody) -> Result<(), PoseError> {
         let params = self.params_from_pose(pose)?;
         self.forward(&params, out, &mut EhmExtras::default());
-        let mut nonfinite = out.nonfinite_inputs;
-        let t = finite_vec(pose.translation, &mut nonfinite);
-        let shift = Affine3A::from_translation(t);
-        out.vertices.iter_mut().for_each(|v| *v += t);
-        out.skin.iter_mut().for_each(|s| *s = shift * *s);
-        out.joints.iter_mut().for_each(|j| *j = shift * *j);
-        out.nonfinite_inputs = nonfinite;
         Ok(())
     }
 }
