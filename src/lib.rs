@@ -3,6 +3,7 @@
 //! Data flows one way: inputs → body → Gaussians → splat → refine → screen. This crate holds
 //! every stage, each runnable headless; the `ui` crate is the viewer window around it.
 
+pub mod atomic_file;
 pub mod bench;
 pub mod body;
 pub mod camera;
@@ -11,3 +12,4 @@ pub mod gpu;
 pub mod npz;
 pub mod onnx;
 pub mod render;
+pub mod tracking;

@@ -32,7 +32,9 @@ pub struct NpyArray {
 /// All arrays of an archive, by name (without `.npy`).
 pub struct Npz {
     file: String,
-    arrays: HashMap<String, NpyArray>,
+    /// Arrays that failed to parse (unsupported dtype, e.g. pickled objects) keep their error
+    /// until they are asked for, so other arrays of the same archive stay readable.
+    arrays: HashMap<String, Result<NpyArray, String>>,
 }
 
 impl Npz {
@@ -66,8 +68,7 @@ impl Npz {
             entry
                 .read_to_end(&mut bytes)
                 .map_err(|e| fail(format!("{name}: {e}")))?;
-            let array = parse_npy(&bytes).map_err(|p| fail(format!("{name}: {p}")))?;
-            arrays.insert(name, array);
+            arrays.insert(name, parse_npy(&bytes));
         }
         Ok(Self {
             file: file.to_owned(),
@@ -87,9 +88,15 @@ impl Npz {
     }
 
     fn get(&self, name: &str) -> Result<&NpyArray, NpzError> {
-        self.arrays
-            .get(name)
-            .ok_or_else(|| self.error(format!("{name}: missing")))
+        match self.arrays.get(name) {
+            Some(Ok(array)) => Ok(array),
+            Some(Err(problem)) => Err(self.error(format!("{name}: {problem}"))),
+            None => Err(self.error(format!("{name}: missing"))),
+        }
+    }
+
+    pub fn contains(&self, name: &str) -> bool {
+        self.arrays.contains_key(name)
     }
 
     pub fn shape(&self, name: &str) -> Result<&[usize], NpzError> {

@@ -10,6 +10,9 @@ use guava::body::{
 };
 use guava::npz::Npz;
 
+mod npz_writer;
+use npz_writer::{f32_bytes, npy};
+
 const MODEL: &str = "tests/data/ehm_synthetic.npz";
 const PARITY: &str = "tests/data/ehm_parity.npz";
 /// The bound. The reference runs in float32 with its own summation order; our f32 sums
@@ -237,27 +240,6 @@ fn with_array(name: &str, npy: Option<Vec<u8>>) -> Vec<u8> {
         out.write_all(&data).expect("write");
     }
     out.finish().expect("finish").into_inner()
-}
-
-fn npy(descr: &str, shape: &[usize], data: &[u8]) -> Vec<u8> {
-    let dims: Vec<String> = shape.iter().map(|d| format!("{d},")).collect();
-    let mut header = format!(
-        "{{'descr': '{descr}', 'fortran_order': False, 'shape': ({}), }}",
-        dims.join(" ")
-    );
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut out = b"\x93NUMPY\x01\x00".to_vec();
-    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    out.extend_from_slice(header.as_bytes());
-    out.extend_from_slice(data);
-    out
-}
-
-fn f32_bytes(values: &[f32]) -> Vec<u8> {
-    values.iter().flat_map(|v| v.to_le_bytes()).collect()
 }
 
 fn i32_bytes(values: &[i32]) -> Vec<u8> {

@@ -292,8 +292,10 @@ pub fn write(path: &Path, cloud: &GaussianCloud) -> Result<(), PlyError> {
             ),
         });
     }
-    let tmp = path.with_extension("ply.tmp");
-    let mut out = std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(io)?);
+    crate::atomic_file::write_atomic(path, |out| write_rows(out, cloud)).map_err(io)
+}
+
+fn write_rows(out: &mut impl Write, cloud: &GaussianCloud) -> std::io::Result<()> {
     let mut header = format!(
         "ply\nformat binary_little_endian 1.0\ncomment written by guava-rs\nelement vertex {}\n",
         cloud.len()
@@ -314,7 +316,7 @@ pub fn write(path: &Path, cloud: &GaussianCloud) -> Result<(), PlyError> {
         header.push_str(&format!("property float {n}\n"));
     }
     header.push_str("end_header\n");
-    out.write_all(header.as_bytes()).map_err(io)?;
+    out.write_all(header.as_bytes())?;
     let mut row = Vec::with_capacity(names.len());
     for i in 0..cloud.len() {
         row.clear();
@@ -328,12 +330,8 @@ pub fn write(path: &Path, cloud: &GaussianCloud) -> Result<(), PlyError> {
         row.extend(cloud.scales[i].iter().map(|s| s.ln()));
         row.extend_from_slice(&cloud.rotations[i]);
         for v in &row {
-            out.write_all(&v.to_le_bytes()).map_err(io)?;
+            out.write_all(&v.to_le_bytes())?;
         }
     }
-    out.into_inner()
-        .map_err(|e| io(e.into_error()))?
-        .sync_all()
-        .map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(io)
+    Ok(())
 }

@@ -202,9 +202,10 @@ impl HeadlessRenderer {
 /// Writes a PNG through a temporary file renamed into place (never a half-written image).
 pub fn save_png(image: &image::RgbImage, path: &std::path::Path) -> anyhow::Result<()> {
     use anyhow::Context;
-    let tmp = path.with_extension("png.tmp");
-    image
-        .save_with_format(&tmp, image::ImageFormat::Png)
-        .with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+    crate::atomic_file::write_atomic(path, |out| {
+        image
+            .write_to(out, image::ImageFormat::Png)
+            .map_err(std::io::Error::other)
+    })
+    .with_context(|| format!("writing {}", path.display()))
 }

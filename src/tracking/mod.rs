@@ -1,0 +1,18 @@
+//! Tracking: per-frame body parameters and cameras, from our file format or imported, played back
+//! onto a body model.
+//!
+//! Data flows one way: a file ([`Tracking`], or [`import`] from ARKit CSV / SMPL-X npz) →
+//! [`Retarget`] (channel names matched to one model, losses reported) → [`Player`] time →
+//! [`Retarget::sample`] into a [`crate::body::BodyPose`] → the body model.
+
+mod format;
+pub mod import;
+mod playback;
+mod retarget;
+
+pub use format::{
+    BodyKind, EhmIdentityRecord, Frame, Identity, MAX_COEFFICIENT, MAX_ROTATION, MAX_TRANSLATION,
+    TRACKING_FORMAT, TrackedCamera, Tracking, TrackingError,
+};
+pub use playback::{Player, camera_at};
+pub use retarget::{Retarget, RetargetReport};
