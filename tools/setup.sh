@@ -2,7 +2,8 @@
 # Sets up what guava-rs needs beyond cargo, idempotently, on Debian/Ubuntu:
 #  - Vulkan (Mesa's software driver lavapipe works without a GPU), Xvfb and the X libraries winit loads;
 #  - ONNX Runtime's shared library, from the pinned PyPI wheel, into target/onnxruntime/
-#    (the library finds it there; nothing is downloaded at cargo build time).
+#    (the library finds it there; nothing is downloaded at cargo build time);
+#  - NumPy for the Python tools the tests run (tools/convert_ehm_tracking.py reads NumPy pickles).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -40,3 +41,9 @@ if [ ! -f "$ORT_DIR/libonnxruntime.so.$ORT_VERSION" ]; then
   rm "$ORT_DIR/$ORT_WHEEL"
 fi
 ln -sf "libonnxruntime.so.$ORT_VERSION" "$ORT_DIR/libonnxruntime.so"
+
+if ! python3 -c "import numpy" 2>/dev/null; then
+  echo "setup: installing NumPy for the Python tools"
+  python3 -m pip install --quiet "numpy>=1.26" ||
+    python3 -m pip install --quiet --user --break-system-packages "numpy>=1.26"
+fi

@@ -44,6 +44,10 @@ pub trait Posable {
     fn triangles(&self) -> &[[u32; 3]];
     /// Poses into `out` (reused across frames). Non-finite inputs are treated as zero and counted.
     fn pose(&self, pose: &BodyPose, out: &mut PosedBody) -> Result<(), PoseError>;
+    /// Whether the model takes EHM's identity (joint offsets, head and hand scale).
+    fn uses_ehm_identity(&self) -> bool {
+        false
+    }
 }
 
 impl BodyPose {

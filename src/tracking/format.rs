@@ -76,6 +76,17 @@ pub struct EhmIdentityRecord {
     pub hand_scale: [f32; 3],
 }
 
+impl EhmIdentityRecord {
+    /// The identity an EHM body is built with (`EhmModel::identity`).
+    pub fn to_identity(&self) -> crate::body::EhmIdentity {
+        crate::body::EhmIdentity {
+            joints_offset: self.joints_offset.iter().map(|&o| o.into()).collect(),
+            head_scale: self.head_scale.into(),
+            hand_scale: self.hand_scale.into(),
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Frame {

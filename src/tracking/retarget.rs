@@ -247,7 +247,7 @@ impl Retarget {
                 None => report.unmapped_identity.push(name.clone()),
             }
         }
-        report.ehm_identity_ignored = tracking.identity.ehm.is_some();
+        report.ehm_identity_ignored = tracking.identity.ehm.is_some() && !model.uses_ehm_identity();
         report.joints_mapped = joints.len();
         report.parameters_mapped = parameters.len();
         Self {

@@ -420,6 +420,10 @@ impl EhmModel {
 }
 
 impl Posable for EhmModel {
+    fn uses_ehm_identity(&self) -> bool {
+        true
+    }
+
     fn joint_names(&self) -> impl ExactSizeIterator<Item = &str> {
         SMPLX_JOINTS.iter().copied()
     }
