@@ -1,12 +1,12 @@
 //! `guava`: the headless CLI. `guava info` reports the GPU and ONNX Runtime; `guava render` draws a
-//! splat file to PNG; `guava bench splat` times the splatting pass.
+//! splat file to PNG; `guava motion` reads and converts motion files; `guava bench` times stages.
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use guava::camera::Camera;
 use guava::gpu::GpuContext;
 use guava::render::HeadlessRenderer;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
 #[command(
@@ -41,6 +41,17 @@ enum Command {
         yaw: f32,
         #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
         pitch: f32,
+    },
+    /// Read a motion (tracking .json, ARKit .csv, SMPL-X .npz), say what the default body (or an
+    /// EHM model) takes of it, and optionally write it in our tracking format.
+    Motion {
+        file: PathBuf,
+        /// Write it as a tracking .json (validated, atomically).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Report retargeting onto this EHM model (.npz) instead of the default body.
+        #[arg(long)]
+        ehm: Option<PathBuf>,
     },
     /// Benchmarks (print a table).
     Bench {
@@ -102,11 +113,62 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
+        Command::Motion { file, out, ehm } => motion(&file, out.as_deref(), ehm.as_deref()),
         Command::Bench { which } => match which {
             Bench::Splat(args) => guava::bench::splat(&args),
             Bench::Body(args) => guava::bench::body(&args),
         },
     }
+}
+
+fn motion(file: &Path, out: Option<&Path>, ehm: Option<&Path>) -> Result<()> {
+    use guava::tracking::Retarget;
+    let imported = guava::tracking::import::open_motion(file)?;
+    let t = &imported.tracking;
+    println!(
+        "{}: {:?} rig, {} frames at {} fps ({:.2} s), {} joints, {} parameters, {} identity values{}",
+        file.display(),
+        t.body,
+        t.frames.len(),
+        t.fps,
+        t.duration(),
+        t.joints.len(),
+        t.parameters.len(),
+        t.identity.parameters.len(),
+        if t.frames[0].camera.is_some() {
+            ", cameras"
+        } else {
+            ""
+        }
+    );
+    for note in &imported.notes {
+        println!("  import: {note}");
+    }
+    let (target, report) = match ehm {
+        Some(path) => {
+            let mut model = guava::body::EhmModel::load(path)?;
+            if let Some(identity) = &t.identity.ehm {
+                model.identity = identity.to_identity();
+            }
+            (path.display().to_string(), Retarget::new(t, &model).report)
+        }
+        None => (
+            "the default body".into(),
+            Retarget::new(t, &guava::body::BodyModel::default_body()?).report,
+        ),
+    };
+    println!(
+        "on {target}: drives {} joints and {} parameters",
+        report.joints_mapped, report.parameters_mapped
+    );
+    for line in report.lines() {
+        println!("  {line}");
+    }
+    if let Some(out) = out {
+        t.save(out)?;
+        println!("wrote {}", out.display());
+    }
+    Ok(())
 }
 
 fn info() -> Result<()> {

@@ -101,3 +101,38 @@ fn render_writes_a_png_and_bad_files_are_named() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn motion_reports_what_the_default_body_takes_and_converts() {
+    let dir = std::env::temp_dir().join(format!("guava-cli-motion-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let csv = dir.join("face.csv");
+    std::fs::write(&csv, "JawOpen,Foo\n0.2,1\n0.4,2\n").expect("write");
+    let out = dir.join("face.json");
+    let (ok, stdout, stderr) = guava(&[
+        "motion",
+        csv.to_str().expect("utf-8"),
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("2 frames at 60 fps"), "{stdout}");
+    assert!(
+        stdout.contains("columns not imported") && stdout.contains("Foo"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("drives 0 joints and 1 parameters"),
+        "{stdout}"
+    );
+    let t = guava::tracking::Tracking::load(&out).expect("written file loads");
+    assert_eq!(t.frames[1].values, [0.4]);
+
+    let (ok, _, stderr) = guava(&["motion", "tests/data/tiny_mlp.json"]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("tests/data/tiny_mlp.json: input_name: unknown field `input_name`"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

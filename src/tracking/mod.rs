@@ -16,3 +16,11 @@ pub use format::{
 };
 pub use playback::{Player, camera_at};
 pub use retarget::{Retarget, RetargetReport};
+
+/// The shipped demo motion for the default body (`tools/make_demo_motion.py`).
+pub const DEMO_MOTION_JSON: &[u8] = include_bytes!("../../assets/demo_motion.json");
+
+/// The embedded demo motion, parsed and validated (the tests check it loads).
+pub fn demo_motion() -> Result<Tracking, TrackingError> {
+    Tracking::from_json(DEMO_MOTION_JSON, "assets/demo_motion.json (embedded)")
+}

@@ -8,6 +8,15 @@ use glam::{Quat, Vec3};
 use super::format::{BodyKind, Tracking};
 use crate::body::{BodyModel, BodyPose, Posable, PosedBody, SMPLX_JOINTS, smplx_to_default};
 
+/// Parameters with a close counterpart on the other rig: EHM's eyelid closure (0 open … 1
+/// closed) and ARKit's blink weight describe the same motion on different faces.
+const SIMILAR_PARAMETERS: [(&str, &str); 4] = [
+    ("eyelid_left", "eyeBlinkLeft"),
+    ("eyelid_right", "eyeBlinkRight"),
+    ("eyeBlinkLeft", "eyelid_left"),
+    ("eyeBlinkRight", "eyelid_right"),
+];
+
 /// How one tracked joint lands on the model: `R_model = pre · R_track · post`.
 #[derive(Clone, Debug)]
 struct JointLink {
@@ -40,6 +49,8 @@ pub struct RetargetReport {
     pub ehm_identity_ignored: bool,
     /// Arm rotations were corrected for a different rest pose (T-pose ↔ A-pose).
     pub rest_corrected: bool,
+    /// Parameters carried onto a similar but not equivalent one (`from → to`).
+    pub approximations: Vec<String>,
 }
 
 impl RetargetReport {
@@ -65,6 +76,12 @@ impl RetargetReport {
                 "EHM joint offsets and head/hand scales apply only to an EHM body and are not applied"
                     .into(),
             );
+        }
+        if !self.approximations.is_empty() {
+            lines.push(format!(
+                "approximated by a similar parameter: {}",
+                self.approximations.join(", ")
+            ));
         }
         if self.rest_corrected {
             lines.push(
@@ -235,9 +252,17 @@ impl Retarget {
         let model_parameter = |name: &str| model.parameter_names().position(|n| n == name);
         let mut parameters = Vec::new();
         for (t, name) in tracking.parameters.iter().enumerate() {
-            match model_parameter(name) {
-                Some(m) => parameters.push((t, m)),
-                None => report.unmapped_parameters.push(name.clone()),
+            let similar = SIMILAR_PARAMETERS
+                .iter()
+                .find(|(from, _)| from == name)
+                .and_then(|&(from, to)| Some((model_parameter(to)?, format!("{from} → {to}"))));
+            match (model_parameter(name), similar) {
+                (Some(m), _) => parameters.push((t, m)),
+                (None, Some((m, note))) => {
+                    parameters.push((t, m));
+                    report.approximations.push(note);
+                }
+                (None, None) => report.unmapped_parameters.push(name.clone()),
             }
         }
         let mut identity = Vec::new();

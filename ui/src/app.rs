@@ -2,6 +2,7 @@
 //! drag-and-drop, and the viewport. Loading runs on a worker thread with progress and Cancel.
 
 use crate::body_panel::BodyState;
+use crate::motion::Motion;
 use crate::orbit::OrbitCamera;
 use crate::viewport::{
     Content, DisplaySettings, SceneRef, ViewportCallback, ViewportReport, ViewportResources,
@@ -10,6 +11,7 @@ use guava::body::BodyModel;
 use guava::gaussians::GaussianCloud;
 use guava::render::present::PresentMode;
 use guava::render::splatter::max_gaussians;
+use guava::tracking::import::{Imported, open_motion};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::sync::{Arc, Mutex};
@@ -23,6 +25,10 @@ pub struct Options {
     /// Save the window's own frame as PNG when `exit_after_secs` have passed, then close.
     pub screenshot: Option<PathBuf>,
     pub exit_after_secs: Option<f32>,
+    /// Start playing the demo motion (the window does; tests start paused at frame 0).
+    pub autoplay: bool,
+    /// Start paused at this time of the motion (seconds), e.g. for scripted screenshots.
+    pub motion_time: Option<f32>,
 }
 
 struct Scene {
@@ -46,6 +52,7 @@ pub enum View {
 enum Loaded {
     Cloud(GaussianCloud),
     Body(BodyModel),
+    Motion(Imported),
 }
 
 struct Loading {
@@ -58,6 +65,8 @@ pub struct GuavaApp {
     options: Options,
     scene: Option<Scene>,
     body: Option<BodyState>,
+    /// The motion driving the body (the demo motion until another is opened).
+    motion: Option<Motion>,
     view: View,
     next_generation: u64,
     orbit: OrbitCamera,
@@ -96,6 +105,7 @@ impl GuavaApp {
             options: options.clone(),
             scene: None,
             body: None,
+            motion: None,
             view: View::Body,
             next_generation: 0,
             orbit: OrbitCamera::default(),
@@ -123,12 +133,65 @@ impl GuavaApp {
         app
     }
 
-    /// Shows the embedded default body (Anny), posed at rest.
+    /// Shows the embedded default body (Anny) with the demo motion on its timeline.
     fn load_default_body(&mut self) {
         match BodyModel::default_body() {
             Ok(model) => self.set_body(model, "default body template"),
+            Err(e) => return self.error(e.to_string()),
+        }
+        match guava::tracking::demo_motion() {
+            Ok(tracking) => {
+                let imported = Imported {
+                    tracking,
+                    notes: Vec::new(),
+                };
+                self.set_motion(
+                    "demo motion — authored keyframes (tools/make_demo_motion.py), not tracked from a video".into(),
+                    imported,
+                );
+                if let Some(motion) = &mut self.motion {
+                    motion.player.playing = self.options.autoplay;
+                    if let Some(t) = self.options.motion_time {
+                        motion.player.playing = false;
+                        motion.player.seek(t as f64);
+                    }
+                }
+            }
             Err(e) => self.error(e.to_string()),
         }
+    }
+
+    /// Plays `imported` on the current body (there always is one: the default at least).
+    fn set_motion(&mut self, label: String, imported: Imported) {
+        let Some(body) = &self.body else {
+            return self.error("no body to play the motion on".into());
+        };
+        let frames = imported.tracking.frames.len();
+        let fps = imported.tracking.fps;
+        let motion = Motion::new(label, imported, body.model.as_ref());
+        let notes = motion.notes().len();
+        self.status = Some((
+            format!(
+                "{}: {frames} frames at {fps} fps{}",
+                motion.label,
+                if notes > 0 {
+                    format!(" ({notes} notes in the Motion panel)")
+                } else {
+                    String::new()
+                }
+            ),
+            false,
+        ));
+        self.motion = Some(motion);
+        self.view = View::Body;
+    }
+
+    pub fn motion(&self) -> Option<&Motion> {
+        self.motion.as_ref()
+    }
+
+    pub fn motion_mut(&mut self) -> Option<&mut Motion> {
+        self.motion.as_mut()
     }
 
     /// Replaces the posed body (a validated template) and shows it.
@@ -140,6 +203,9 @@ impl GuavaApp {
             model.vertices.len(),
             model.joints.len()
         );
+        if let Some(motion) = &mut self.motion {
+            motion.retarget_to(&model);
+        }
         self.body = Some(BodyState::new(model, label, self.next_generation));
         self.view = View::Body;
         self.reset_camera();
@@ -227,9 +293,15 @@ impl GuavaApp {
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase);
-        let body = match ext.as_deref() {
-            Some("ply") => false,
-            Some("glb") => true,
+        enum Kind {
+            Cloud,
+            Body,
+            Motion,
+        }
+        let kind = match ext.as_deref() {
+            Some("ply") => Kind::Cloud,
+            Some("glb") => Kind::Body,
+            Some("json" | "csv" | "npz") => Kind::Motion,
             Some("png" | "jpg" | "jpeg") => {
                 self.error(format!(
                     "{}: photo-to-avatar reconstruction is not implemented yet (see README, \"Missing\")",
@@ -239,7 +311,8 @@ impl GuavaApp {
             }
             _ => {
                 self.error(format!(
-                    "{}: unsupported file type (open a 3DGS .ply or a body template .glb)",
+                    "{}: unsupported file type (open a 3DGS .ply, a body template .glb, or a motion: \
+                     tracking .json, ARKit .csv, SMPL-X .npz)",
                     path.display()
                 ));
                 return;
@@ -248,14 +321,16 @@ impl GuavaApp {
         let (tx, rx) = std::sync::mpsc::channel();
         let worker_path = path.clone();
         std::thread::spawn(move || {
-            let result = if body {
-                BodyModel::load(&worker_path)
+            let result = match kind {
+                Kind::Body => BodyModel::load(&worker_path)
                     .map(Loaded::Body)
-                    .map_err(|e| e.to_string())
-            } else {
-                guava::gaussians::ply::read(&worker_path)
+                    .map_err(|e| e.to_string()),
+                Kind::Cloud => guava::gaussians::ply::read(&worker_path)
                     .map(Loaded::Cloud)
-                    .map_err(|e| e.to_string())
+                    .map_err(|e| e.to_string()),
+                Kind::Motion => open_motion(&worker_path)
+                    .map(Loaded::Motion)
+                    .map_err(|e| e.to_string()),
             };
             // The receiver is gone if the user cancelled: nothing to do then.
             let _ = tx.send(result);
@@ -287,6 +362,10 @@ impl GuavaApp {
                 match result {
                     Ok(Loaded::Cloud(cloud)) => self.accept_loaded(&path, cloud),
                     Ok(Loaded::Body(model)) => self.set_body(model, &path.display().to_string()),
+                    Ok(Loaded::Motion(imported)) => {
+                        let label = format!("{} — {}", file_name(&path), imported.tracking.source);
+                        self.set_motion(label, imported);
+                    }
                     Err(e) => self.error(e),
                 }
             }
@@ -330,7 +409,10 @@ impl GuavaApp {
             ui.menu_button("File", |ui| {
                 if ui.button("Open…").clicked() {
                     if let Some(path) = rfd::FileDialog::new()
-                        .add_filter("3DGS PLY or body template", &["ply", "glb"])
+                        .add_filter(
+                            "3DGS PLY, body template or motion",
+                            &["ply", "glb", "json", "csv", "npz"],
+                        )
                         .pick_file()
                     {
                         self.open(path);
@@ -396,6 +478,19 @@ impl GuavaApp {
                 Some(body) => body.ui(ui),
                 None => {
                     ui.label("no body model loaded");
+                }
+            }
+            ui.separator();
+            ui.heading("Motion");
+            match &self.motion {
+                Some(motion) => {
+                    motion.info_ui(ui);
+                    if ui.button("Unload motion").clicked() {
+                        self.motion = None;
+                    }
+                }
+                None => {
+                    ui.label("none: open a tracking .json, ARKit .csv or SMPL-X .npz");
                 }
             }
             ui.separator();
@@ -643,6 +738,14 @@ impl eframe::App for GuavaApp {
         self.poll_loading();
         self.handle_dropped_files(&ctx);
 
+        if let (Some(motion), Some(body)) = (&mut self.motion, &mut self.body) {
+            let dt = ctx.input(|i| i.unstable_dt) as f64;
+            motion.update(dt, &mut body.pose);
+            if motion.is_playing() {
+                ctx.request_repaint();
+            }
+        }
+
         egui::Panel::top("menu").show(ui, |ui| self.menu_ui(ui));
         egui::Panel::bottom("status").show(ui, |ui| {
             ui.horizontal(|ui| {
@@ -668,6 +771,9 @@ impl eframe::App for GuavaApp {
                 }
             });
         });
+        if let (Some(motion), View::Body) = (&mut self.motion, self.view) {
+            egui::Panel::bottom("timeline").show(ui, |ui| motion.timeline_ui(ui));
+        }
         egui::Panel::left("scene").resizable(true).show(ui, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| self.side_panel_ui(ui));
         });

@@ -3,6 +3,7 @@
 
 pub mod app;
 pub mod body_panel;
+pub mod motion;
 pub mod orbit;
 pub mod viewport;
 

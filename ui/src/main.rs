@@ -8,7 +8,7 @@ use std::sync::Arc;
 #[derive(Parser)]
 #[command(name = "guava-viewer", version, about = "GUAVA avatar viewer")]
 struct Args {
-    /// A 3DGS .ply file to open.
+    /// A file to open: 3DGS .ply, body template .glb, or a motion (.json, ARKit .csv, SMPL-X .npz).
     file: Option<PathBuf>,
     /// Start with the synthetic test scene.
     #[arg(long)]
@@ -19,6 +19,9 @@ struct Args {
     /// Close after this many seconds (for tests and scripted screenshots).
     #[arg(long)]
     exit_after_secs: Option<f32>,
+    /// Start with the motion paused at this time (seconds) instead of playing.
+    #[arg(long)]
+    motion_time: Option<f32>,
 }
 
 fn main() {
@@ -36,6 +39,8 @@ fn main() {
         test_scene: args.test_scene,
         screenshot: args.screenshot,
         exit_after_secs: args.exit_after_secs,
+        autoplay: true,
+        motion_time: args.motion_time,
     };
     let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
     // The splatting pass needs more than egui's default limits; ask for them on egui's own device.

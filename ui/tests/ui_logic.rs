@@ -188,3 +188,91 @@ fn body_templates_open_by_file_and_bad_ones_keep_the_current_body() {
     assert_eq!(h.state().view(), View::Body);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn the_demo_motion_plays_pauses_and_steps() {
+    let mut h = harness(Options {
+        autoplay: true,
+        ..Default::default()
+    });
+    for _ in 0..3 {
+        frame(&mut h);
+    }
+    let motion = h.state().motion().expect("the demo motion is loaded");
+    assert!(motion.label.contains("demo motion"));
+    assert!(motion.notes().is_empty(), "{:?}", motion.notes());
+    let (t0, renders0) = (motion.player.time(), h.state().report().renders);
+    for _ in 0..5 {
+        frame(&mut h);
+    }
+    let t1 = h.state().motion().expect("motion").player.time();
+    assert!(t1 > t0, "the clock runs: {t0} → {t1}");
+    assert!(
+        h.state().report().renders > renders0,
+        "playing re-poses and redraws"
+    );
+
+    h.get_by_label("Pause").click();
+    frame(&mut h);
+    frame(&mut h);
+    let (paused_at, renders) = (
+        h.state().motion().expect("motion").player.time(),
+        h.state().report().renders,
+    );
+    for _ in 0..5 {
+        frame(&mut h);
+    }
+    assert_eq!(h.state().motion().expect("motion").player.time(), paused_at);
+    assert_eq!(
+        h.state().report().renders,
+        renders,
+        "paused: nothing redraws"
+    );
+
+    let frame_before = h.state().motion().expect("motion").player.frame();
+    h.get_by_label("Frame >").click();
+    frame(&mut h);
+    frame(&mut h);
+    assert_eq!(
+        h.state().motion().expect("motion").player.frame(),
+        frame_before + 1
+    );
+    assert_eq!(
+        h.state().report().renders,
+        renders + 1,
+        "one step draws once"
+    );
+}
+
+#[test]
+fn motion_files_open_and_bad_ones_keep_the_current_motion() {
+    let mut h = harness(Options::default());
+    h.run();
+    let dir = std::env::temp_dir().join(format!("guava-ui-motion-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let csv = dir.join("face.csv");
+    std::fs::write(
+        &csv,
+        "JawOpen,EyeBlinkLeft,HeadYaw\n0.1,0.0,0.0\n0.5,1.0,0.1\n",
+    )
+    .expect("write");
+    h.state_mut().open(csv);
+    let status = wait_for_status(&mut h, "face.csv");
+    assert!(status.contains("2 frames at 60 fps"), "{status}");
+    let notes = h.state().motion().expect("motion").notes().join("\n");
+    assert!(notes.contains("HeadYaw"), "{notes}");
+    let bad = dir.join("bad.json");
+    std::fs::write(&bad, "{\"format\": \"guava-rs tracking 1\", \"fps\": 30}").expect("write");
+    h.state_mut().open(bad);
+    let status = wait_for_status(&mut h, "bad.json");
+    assert!(status.contains("missing field"), "{status}");
+    assert!(
+        h.state()
+            .motion()
+            .expect("motion")
+            .label
+            .contains("face.csv"),
+        "the previous motion stays"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

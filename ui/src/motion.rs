@@ -1,0 +1,142 @@
+//! The loaded motion driving the body: its tracking, how it maps onto the current body, the
+//! playback clock, and the timeline (play/pause, step, loop, speed, scrub) with what could not be
+//! carried over.
+
+use std::sync::Arc;
+
+use guava::body::{BodyPose, Posable};
+use guava::tracking::import::Imported;
+use guava::tracking::{Player, Retarget, Tracking};
+
+/// Playback speeds offered in the timeline.
+const SPEEDS: [f32; 6] = [0.25, 0.5, 1.0, 1.5, 2.0, 4.0];
+/// Longest wall-clock step the clock takes in one UI frame, so a stall does not skip motion.
+const MAX_STEP_S: f64 = 0.25;
+
+pub struct Motion {
+    /// What it is and where it came from, shown above the timeline.
+    pub label: String,
+    tracking: Arc<Tracking>,
+    retarget: Retarget,
+    pub player: Player,
+    /// Import notes and what the current body cannot take, shown to the user.
+    notes: Vec<String>,
+    import_notes: Vec<String>,
+    /// The clock time last written into the pose (`None`: write on the next update).
+    sampled_at: Option<f64>,
+}
+
+impl Motion {
+    pub fn new(label: String, imported: Imported, model: &impl Posable) -> Self {
+        let tracking = Arc::new(imported.tracking);
+        let retarget = Retarget::new(&tracking, model);
+        let mut motion = Self {
+            label,
+            player: Player::new(&tracking),
+            tracking,
+            retarget,
+            notes: Vec::new(),
+            import_notes: imported.notes,
+            sampled_at: None,
+        };
+        motion.refresh_notes();
+        motion
+    }
+
+    /// Maps the same motion onto another body (the time and play state stay).
+    pub fn retarget_to(&mut self, model: &impl Posable) {
+        self.retarget = Retarget::new(&self.tracking, model);
+        self.refresh_notes();
+        self.sampled_at = None;
+    }
+
+    fn refresh_notes(&mut self) {
+        self.notes = self.import_notes.clone();
+        self.notes.extend(self.retarget.report.lines());
+    }
+
+    pub fn notes(&self) -> &[String] {
+        &self.notes
+    }
+
+    pub fn is_playing(&self) -> bool {
+        self.player.playing
+    }
+
+    /// Advances the clock by `dt` seconds and writes the pose when the time moved (or was never
+    /// written). Returns whether the pose was written.
+    pub fn update(&mut self, dt: f64, pose: &mut BodyPose) -> bool {
+        self.player.advance(dt.clamp(0.0, MAX_STEP_S));
+        let time = self.player.time();
+        if self.sampled_at == Some(time) {
+            return false;
+        }
+        self.retarget.sample(&self.tracking, time, pose);
+        self.sampled_at = Some(time);
+        true
+    }
+
+    /// The timeline controls.
+    pub fn timeline_ui(&mut self, ui: &mut egui::Ui) {
+        let p = &mut self.player;
+        ui.horizontal(|ui| {
+            if ui
+                .button("< Frame")
+                .on_hover_text("Previous frame")
+                .clicked()
+            {
+                p.step(-1);
+            }
+            let label = if p.playing { "Pause" } else { "Play" };
+            if ui.button(label).clicked() {
+                if !p.playing && !p.looping && p.time() >= p.duration() {
+                    p.seek(0.0);
+                }
+                p.playing = !p.playing;
+            }
+            if ui.button("Frame >").on_hover_text("Next frame").clicked() {
+                p.step(1);
+            }
+            ui.checkbox(&mut p.looping, "loop");
+            egui::ComboBox::new("speed", "speed")
+                .selected_text(format!("{}×", p.speed))
+                .width(60.0)
+                .show_ui(ui, |ui| {
+                    for s in SPEEDS {
+                        ui.selectable_value(&mut p.speed, s, format!("{s}×"));
+                    }
+                });
+            ui.monospace(format!(
+                "frame {}/{} · {:.2} / {:.2} s",
+                p.frame() + 1,
+                p.frame_count(),
+                p.time(),
+                p.duration()
+            ));
+        });
+        let mut time = p.time();
+        let width = ui.available_width();
+        ui.spacing_mut().slider_width = (width - 50.0).max(50.0);
+        let scrub = ui.add(
+            egui::Slider::new(&mut time, 0.0..=p.duration().max(1e-6))
+                .show_value(false)
+                .text("time"),
+        );
+        if scrub.changed() {
+            p.playing = false;
+            p.seek(time);
+        }
+    }
+
+    /// The motion's description and its notes (what was not applied), for the side panel.
+    pub fn info_ui(&self, ui: &mut egui::Ui) {
+        ui.label(&self.label);
+        ui.label(format!(
+            "drives {} joints and {} parameters of this body",
+            self.retarget.report.joints_mapped, self.retarget.report.parameters_mapped
+        ));
+        for note in &self.notes {
+            ui.colored_label(ui.visuals().warn_fg_color, note);
+        }
+    }
+}
