@@ -75,6 +75,22 @@ impl Camera {
         rot * Mat4::from_translation(-eye)
     }
 
+    /// A world point in pixel-edge coordinates (x, y) and its view depth z. Not clipped: callers
+    /// test `z` against their own near limit.
+    pub fn project(&self, world: Vec3) -> Vec3 {
+        let p = self.view_from_world.transform_point3(world);
+        Vec3::new(
+            self.fx * p.x / p.z + self.cx,
+            self.fy * p.y / p.z + self.cy,
+            p.z,
+        )
+    }
+
+    /// Metres covered by one pixel at view depth `z` (the larger of the two axes).
+    pub fn pixel_footprint(&self, z: f32) -> f32 {
+        z / self.fx.min(self.fy)
+    }
+
     pub fn tiles(&self) -> (u32, u32) {
         (
             self.width.div_ceil(crate::render::TILE_SIZE),
@@ -98,18 +114,31 @@ impl Camera {
 }
 
 /// A view that frames `cloud` (its finite centres' bounding sphere) for a vertical field of view,
-/// orbiting its centre by `yaw` and `pitch` (radians) from the front (looking along +z, y down).
+/// orbiting its centre by `yaw` and `pitch` (radians) from the front: looking along +z with y
+/// down, or, when `y_up`, at the front of a y-up body that faces +z ([`orbit_y_up`]).
 pub fn orbit_view(
     cloud: &crate::gaussians::GaussianCloud,
     fov_y_rad: f32,
     yaw: f32,
     pitch: f32,
+    y_up: bool,
 ) -> Option<Mat4> {
     let (lo, hi) = cloud.bounds()?;
     let centre = 0.5 * (lo + hi);
     let radius = (0.5 * (hi - lo).length()).max(1e-3);
     let distance = radius / (0.5 * fov_y_rad).sin();
-    Some(orbit(centre, distance, yaw, pitch))
+    Some(if y_up {
+        orbit_y_up(centre, distance, yaw, pitch)
+    } else {
+        orbit(centre, distance, yaw, pitch)
+    })
+}
+
+/// [`orbit`] for a y-up world whose subject faces +z (body models): the world is turned half a
+/// turn about x first, so yaw 0, pitch 0 faces the body's front with its head up.
+pub fn orbit_y_up(target: Vec3, distance: f32, yaw: f32, pitch: f32) -> Mat4 {
+    let flip = Mat4::from_diagonal(glam::Vec4::new(1.0, -1.0, -1.0, 1.0));
+    orbit(flip.transform_point3(target), distance, yaw, pitch) * flip
 }
 
 /// Camera on a sphere around `target`; yaw about world −y (up), pitch towards it. Yaw 0, pitch 0

@@ -4,6 +4,7 @@
 //! every stage, each runnable headless; the `ui` crate is the viewer window around it.
 
 pub mod atomic_file;
+pub mod avatar;
 pub mod bench;
 pub mod body;
 pub mod camera;
@@ -11,5 +12,6 @@ pub mod gaussians;
 pub mod gpu;
 pub mod npz;
 pub mod onnx;
+pub mod reconstruct;
 pub mod render;
 pub mod tracking;

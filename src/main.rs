@@ -1,5 +1,6 @@
 //! `guava`: the headless CLI. `guava info` reports the GPU and ONNX Runtime; `guava render` draws a
-//! splat file to PNG; `guava motion` reads and converts motion files; `guava bench` times stages.
+//! splat file or an avatar to PNG; `guava motion` reads and converts motion files; `guava
+//! synth-photo` and `guava reconstruct` make avatars; `guava bench` times stages.
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
@@ -23,10 +24,22 @@ struct Cli {
 enum Command {
     /// Print the GPU adapter, its limits, and whether ONNX Runtime loads.
     Info,
-    /// Render a 3DGS .ply file to a PNG, framed by an orbit camera.
+    /// Render a 3DGS .ply file or an avatar to a PNG, framed by an orbit camera.
     Render {
+        /// A 3DGS splat file.
+        #[arg(long, required_unless_present = "avatar", conflicts_with = "avatar")]
+        ply: Option<PathBuf>,
+        /// An avatar file (.guava), posed on the default body.
         #[arg(long)]
-        ply: PathBuf,
+        avatar: Option<PathBuf>,
+        /// With --avatar: pose it from this motion (tracking .json, ARKit .csv, SMPL-X .npz) at --time.
+        #[arg(long, requires = "avatar")]
+        motion: Option<PathBuf>,
+        #[arg(long, default_value_t = 0.0, requires = "motion")]
+        time: f64,
+        /// With --motion: view through the motion's tracked camera (512², as GUAVA renders).
+        #[arg(long, requires = "motion")]
+        tracked_camera: bool,
         #[arg(long)]
         out: PathBuf,
         #[arg(long, default_value_t = 512)]
@@ -53,6 +66,28 @@ enum Command {
         #[arg(long)]
         ehm: Option<PathBuf>,
     },
+    /// Write a synthetic photo of the default body (a smooth colour pattern on its surface, drawn
+    /// from GUAVA's camera) and its exact tracking beside it (same name, .json): a known answer
+    /// for reconstruction.
+    SynthPhoto {
+        #[arg(long)]
+        out: PathBuf,
+        /// Camera yaw around the body in degrees (positive: towards the body's left).
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        yaw: f32,
+    },
+    /// Default reconstruction (no GUAVA weights) of a photo with its tracking file into an avatar.
+    Reconstruct {
+        /// PNG or JPEG; its alpha channel, if any, is the person mask.
+        #[arg(long)]
+        image: PathBuf,
+        /// The photo's tracking (frame 0's pose and camera); default: beside the image, .json.
+        #[arg(long)]
+        tracking: Option<PathBuf>,
+        /// The avatar file to write (.guava).
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Benchmarks (print a table).
     Bench {
         #[command(subcommand)]
@@ -66,6 +101,8 @@ enum Bench {
     Splat(guava::bench::SplatBenchArgs),
     /// Posing the default body on one CPU core: skinning, transforms and triangle frames.
     Body(guava::bench::BodyBenchArgs),
+    /// Default reconstruction of a synthetic photo, per stage, and animating the avatar.
+    Reconstruct(guava::bench::ReconstructBenchArgs),
 }
 
 fn main() {
@@ -81,6 +118,10 @@ fn run(cli: Cli) -> Result<()> {
         Command::Info => info(),
         Command::Render {
             ply,
+            avatar,
+            motion,
+            time,
+            tracked_camera,
             out,
             width,
             height,
@@ -88,22 +129,46 @@ fn run(cli: Cli) -> Result<()> {
             yaw,
             pitch,
         } => {
-            let cloud = guava::gaussians::ply::read(&ply)?;
-            let view = guava::camera::orbit_view(
-                &cloud,
-                fov.to_radians(),
-                yaw.to_radians(),
-                pitch.to_radians(),
-            )
-            .with_context(|| format!("{}: no finite Gaussian to frame", ply.display()))?;
-            let camera = Camera::from_fov_y(view, width, height, fov.to_radians());
+            // Avatars stand on a y-up body; splat files use GUAVA's y-down axes.
+            let is_avatar = avatar.is_some();
+            let (cloud, name, tracked) = match (ply, avatar) {
+                (Some(ply), _) => {
+                    let cloud = guava::gaussians::ply::read(&ply)?;
+                    (cloud, ply.display().to_string(), None)
+                }
+                (None, Some(avatar)) => {
+                    let (cloud, camera) = posed_avatar(&avatar, motion.as_deref(), time)?;
+                    (
+                        cloud,
+                        avatar.display().to_string(),
+                        camera.filter(|_| tracked_camera),
+                    )
+                }
+                (None, None) => anyhow::bail!("give --ply or --avatar"),
+            };
+            if tracked_camera && tracked.is_none() {
+                anyhow::bail!("--tracked-camera: the motion has no tracked camera");
+            }
+            let camera = match tracked {
+                Some(camera) => camera,
+                None => {
+                    let view = guava::camera::orbit_view(
+                        &cloud,
+                        fov.to_radians(),
+                        yaw.to_radians(),
+                        pitch.to_radians(),
+                        is_avatar,
+                    )
+                    .with_context(|| format!("{name}: no finite Gaussian to frame"))?;
+                    Camera::from_fov_y(view, width, height, fov.to_radians())
+                }
+            };
             let mut renderer = HeadlessRenderer::new(GpuContext::headless()?);
             let background = vec![0.0; cloud.channels];
             let (image, stats) = renderer.render(&cloud, &camera, &background)?;
             guava::render::save_png(&image.to_rgb8(), &out)?;
             println!(
-                "{}: {} Gaussians, {} drawn, {} culled ({} tile pairs) → {} [{}]",
-                ply.display(),
+                "{name}: {} Gaussians, {} drawn, {} culled ({} tile pairs) → {} [{}]",
                 stats.input,
                 stats.visible,
                 stats.culled(),
@@ -113,12 +178,116 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
+        Command::SynthPhoto { out, yaw } => synth_photo(&out, yaw),
+        Command::Reconstruct {
+            image,
+            tracking,
+            out,
+        } => reconstruct(&image, tracking.as_deref(), &out),
         Command::Motion { file, out, ehm } => motion(&file, out.as_deref(), ehm.as_deref()),
         Command::Bench { which } => match which {
             Bench::Splat(args) => guava::bench::splat(&args),
             Bench::Body(args) => guava::bench::body(&args),
+            Bench::Reconstruct(args) => guava::bench::reconstruct(&args),
         },
     }
+}
+
+/// An avatar posed on the default body: at rest, or by `motion` at `time` (then also the
+/// motion's tracked camera at that time, if it has one).
+fn posed_avatar(
+    path: &Path,
+    motion: Option<&Path>,
+    time: f64,
+) -> Result<(guava::gaussians::GaussianCloud, Option<Camera>)> {
+    use guava::body::{BodyModel, BodyPose, PosedBody};
+    let avatar = guava::avatar::Avatar::load(path)?;
+    let body = BodyModel::default_body()?;
+    avatar
+        .check_body(&body)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let mut pose = BodyPose::rest(&body);
+    let mut camera = None;
+    if let Some(motion) = motion {
+        let t = guava::tracking::import::open_motion(motion)?.tracking;
+        guava::tracking::Retarget::new(&t, &body).sample(&t, time, &mut pose);
+        camera = guava::tracking::camera_at(&t, time)
+            .map(|(w2c, invtanfov)| Camera::guava(w2c, guava::reconstruct::SOURCE_SIZE, invtanfov));
+    }
+    avatar.apply_identity(&body, &mut pose);
+    let mut posed = PosedBody::default();
+    body.pose(&pose, &mut posed)?;
+    let mut cloud = guava::gaussians::GaussianCloud::new(avatar.channels);
+    guava::avatar::Rig::default().animate(&avatar, &posed, &body.triangles, &mut cloud)?;
+    Ok((cloud, camera))
+}
+
+fn synth_photo(out: &Path, yaw: f32) -> Result<()> {
+    use guava::reconstruct::{SourceView, synthetic};
+    let body = guava::body::BodyModel::default_body()?;
+    let view = SourceView {
+        pose: guava::body::BodyPose::rest(&body),
+        camera: synthetic::upper_body_camera(&body, yaw.to_radians()),
+    };
+    let image = synthetic::photo(&body, &view.pose, &view.camera, synthetic::banded_texture)?;
+    guava::atomic_file::write_atomic(out, |w| {
+        image
+            .write_to(w, image::ImageFormat::Png)
+            .map_err(std::io::Error::other)
+    })
+    .with_context(|| format!("writing {}", out.display()))?;
+    let tracking_path = guava::reconstruct::tracking_beside(out);
+    let name = out.file_name().unwrap_or_default().to_string_lossy();
+    synthetic::tracking_of(
+        &body,
+        &view,
+        &format!("synthetic photo {name} (guava synth-photo)"),
+    )
+    .save(&tracking_path)?;
+    println!(
+        "wrote {} (synthetic: the default body with a colour pattern, yaw {yaw}°) and its tracking {}",
+        out.display(),
+        tracking_path.display()
+    );
+    Ok(())
+}
+
+fn reconstruct(image: &Path, tracking: Option<&Path>, out: &Path) -> Result<()> {
+    use guava::reconstruct::{DEFAULT_UV_SIZE, UvMap, reconstruct_photo_file, tracking_beside};
+    let body = guava::body::BodyModel::default_body()?;
+    let uv = UvMap::for_body(&body, DEFAULT_UV_SIZE);
+    let tracking = tracking.map_or_else(|| tracking_beside(image), Path::to_path_buf);
+    let (avatar, report) = reconstruct_photo_file(&body, &uv, image, &tracking, &mut |stage| {
+        eprintln!("  {}…", stage.name());
+        true
+    })?;
+    avatar.save(out)?;
+    println!(
+        "{}: {} ({} template + {} UV Gaussians, {} channels) → {}",
+        image.display(),
+        avatar.kind.label(),
+        avatar.template.len(),
+        avatar.uv.local.len(),
+        avatar.channels,
+        out.display()
+    );
+    println!(
+        "  texels: {} valid, {} seen by the camera, {} filled by symmetry, the rest inpainted; mask from {}",
+        report.texels,
+        report.observed,
+        report.mirrored,
+        if report.mask_from_alpha {
+            "the alpha channel"
+        } else {
+            "the tracked body's silhouette (no alpha)"
+        }
+    );
+    let total: f64 = report.timings.iter().map(|(_, d)| d.as_secs_f64()).sum();
+    for (stage, d) in &report.timings {
+        println!("  {:32} {:8.1} ms", stage.name(), d.as_secs_f64() * 1e3);
+    }
+    println!("  {:32} {:8.1} ms", "total", total * 1e3);
+    Ok(())
 }
 
 fn motion(file: &Path, out: Option<&Path>, ehm: Option<&Path>) -> Result<()> {

@@ -1,9 +1,11 @@
 //! Benchmarks behind `guava bench …`: each prints a table of medians and the hardware it ran on.
 
 mod body;
+mod reconstruct;
 mod splat;
 
 pub use body::{BodyBenchArgs, body};
+pub use reconstruct::{ReconstructBenchArgs, reconstruct};
 pub use splat::{SplatBenchArgs, splat};
 
 fn median(mut v: Vec<f64>) -> f64 {

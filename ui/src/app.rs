@@ -1,18 +1,21 @@
 //! The viewer window: menu, scene panel with camera and render controls and the HUD, status bar,
 //! drag-and-drop, and the viewport. Loading runs on a worker thread with progress and Cancel.
 
+use crate::avatar_view::AvatarState;
 use crate::body_panel::BodyState;
 use crate::motion::Motion;
 use crate::orbit::OrbitCamera;
 use crate::viewport::{
     Content, DisplaySettings, SceneRef, ViewportCallback, ViewportReport, ViewportResources,
 };
+use guava::avatar::Avatar;
 use guava::body::BodyModel;
 use guava::gaussians::GaussianCloud;
 use guava::render::present::PresentMode;
 use guava::render::splatter::max_gaussians;
 use guava::tracking::import::{Imported, open_motion};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -46,6 +49,8 @@ pub enum View {
     Body,
     /// The loaded Gaussian scene through the splatting pass.
     Gaussians,
+    /// The avatar's Gaussians on the posed body, through the splatting pass.
+    Avatar,
 }
 
 /// What a worker thread loaded.
@@ -53,18 +58,25 @@ enum Loaded {
     Cloud(GaussianCloud),
     Body(BodyModel),
     Motion(Imported),
+    /// An avatar file, or a reconstruction (then with what it saw).
+    Avatar(Avatar, Option<guava::reconstruct::Report>),
 }
 
 struct Loading {
     path: PathBuf,
     started: Instant,
     rx: Receiver<Result<Loaded, String>>,
+    /// The stage a long job is in, shown beside the spinner.
+    stage: Arc<Mutex<&'static str>>,
+    /// Set by Cancel; jobs that check it stop at their next stage.
+    cancel: Arc<AtomicBool>,
 }
 
 pub struct GuavaApp {
     options: Options,
     scene: Option<Scene>,
     body: Option<BodyState>,
+    avatar: Option<AvatarState>,
     /// The motion driving the body (the demo motion until another is opened).
     motion: Option<Motion>,
     view: View,
@@ -105,6 +117,7 @@ impl GuavaApp {
             options: options.clone(),
             scene: None,
             body: None,
+            avatar: None,
             motion: None,
             view: View::Body,
             next_generation: 0,
@@ -206,6 +219,11 @@ impl GuavaApp {
         if let Some(motion) = &mut self.motion {
             motion.retarget_to(&model);
         }
+        if let Some(avatar) = &self.avatar
+            && avatar.avatar.check_body(&model).is_err()
+        {
+            self.avatar = None;
+        }
         self.body = Some(BodyState::new(model, label, self.next_generation));
         self.view = View::Body;
         self.reset_camera();
@@ -227,6 +245,9 @@ impl GuavaApp {
         let mut view = self.view;
         ui.selectable_value(&mut view, View::Body, "Body mesh");
         ui.selectable_value(&mut view, View::Gaussians, "Gaussians");
+        if self.avatar.is_some() {
+            ui.selectable_value(&mut view, View::Avatar, "Avatar");
+        }
         self.set_view(view);
     }
 
@@ -237,6 +258,13 @@ impl GuavaApp {
 
     pub fn body_mut(&mut self) -> Option<&mut BodyState> {
         self.body.as_mut()
+    }
+
+    /// The avatar panel's description (its kind and source) and its Gaussian count.
+    pub fn avatar_info(&self) -> Option<(&str, usize)> {
+        self.avatar
+            .as_ref()
+            .map(|a| (a.label.as_str(), a.avatar.len()))
     }
 
     pub fn scene_len(&self) -> Option<usize> {
@@ -297,22 +325,35 @@ impl GuavaApp {
             Cloud,
             Body,
             Motion,
+            Avatar,
+            Photo(PathBuf, Arc<BodyModel>),
         }
         let kind = match ext.as_deref() {
             Some("ply") => Kind::Cloud,
             Some("glb") => Kind::Body,
             Some("json" | "csv" | "npz") => Kind::Motion,
+            Some("guava") => Kind::Avatar,
             Some("png" | "jpg" | "jpeg") => {
-                self.error(format!(
-                    "{}: photo-to-avatar reconstruction is not implemented yet (see README, \"Missing\")",
-                    path.display()
-                ));
-                return;
+                let tracking = guava::reconstruct::tracking_beside(&path);
+                if !tracking.is_file() {
+                    self.error(format!(
+                        "{}: reconstruction needs the photo's tracking, {} beside it; fitting a photo \
+                         without tracking is not implemented yet (see README, \"Missing\")",
+                        path.display(),
+                        tracking.display()
+                    ));
+                    return;
+                }
+                let Some(body) = &self.body else {
+                    return self.error("no body to reconstruct on".into());
+                };
+                Kind::Photo(tracking, body.model.clone())
             }
             _ => {
                 self.error(format!(
-                    "{}: unsupported file type (open a 3DGS .ply, a body template .glb, or a motion: \
-                     tracking .json, ARKit .csv, SMPL-X .npz)",
+                    "{}: unsupported file type (open a 3DGS .ply, a body template .glb, an avatar \
+                     .guava, a photo .png/.jpg with its tracking .json, or a motion: tracking .json, \
+                     ARKit .csv, SMPL-X .npz)",
                     path.display()
                 ));
                 return;
@@ -320,8 +361,21 @@ impl GuavaApp {
         };
         let (tx, rx) = std::sync::mpsc::channel();
         let worker_path = path.clone();
+        let stage = Arc::new(Mutex::new("reading"));
+        let cancel = Arc::new(AtomicBool::new(false));
+        let (worker_stage, worker_cancel) = (stage.clone(), cancel.clone());
         std::thread::spawn(move || {
             let result = match kind {
+                Kind::Avatar => Avatar::load(&worker_path)
+                    .map(|a| Loaded::Avatar(a, None))
+                    .map_err(|e| e.to_string()),
+                Kind::Photo(tracking, body) => reconstruct_worker(
+                    &body,
+                    &worker_path,
+                    &tracking,
+                    &worker_stage,
+                    &worker_cancel,
+                ),
                 Kind::Body => BodyModel::load(&worker_path)
                     .map(Loaded::Body)
                     .map_err(|e| e.to_string()),
@@ -339,7 +393,115 @@ impl GuavaApp {
             path,
             started: Instant::now(),
             rx,
+            stage,
+            cancel,
         });
+    }
+
+    /// Reconstructs a synthetic photo of the current body (the known-answer demo: the body with a
+    /// colour pattern, drawn from GUAVA's camera), so a fresh install can make an avatar offline.
+    pub fn reconstruct_synthetic_photo(&mut self) {
+        use guava::reconstruct::{SourceView, synthetic};
+        let Some(body) = &self.body else {
+            return self.error("no body to reconstruct on".into());
+        };
+        let model = body.model.clone();
+        let view = SourceView {
+            pose: guava::body::BodyPose::rest(model.as_ref()),
+            camera: synthetic::upper_body_camera(&model, 0.35),
+        };
+        let (tx, rx) = std::sync::mpsc::channel();
+        let stage = Arc::new(Mutex::new("drawing the synthetic photo"));
+        let cancel = Arc::new(AtomicBool::new(false));
+        let (worker_stage, worker_cancel) = (stage.clone(), cancel.clone());
+        std::thread::spawn(move || {
+            let run = || -> Result<Loaded, String> {
+                let image =
+                    synthetic::photo(&model, &view.pose, &view.camera, synthetic::banded_texture)
+                        .map_err(|e| e.to_string())?;
+                let source =
+                    guava::reconstruct::SourceImage::from_rgba(&image, true, SYNTHETIC_PHOTO)
+                        .map_err(|e| e.to_string())?;
+                let uv = guava::reconstruct::UvMap::for_body(
+                    &model,
+                    guava::reconstruct::DEFAULT_UV_SIZE,
+                );
+                guava::reconstruct::reconstruct_default(
+                    &model,
+                    &uv,
+                    &view,
+                    source,
+                    SYNTHETIC_PHOTO,
+                    &mut progress(&worker_stage, &worker_cancel),
+                )
+                .map(|(a, r)| Loaded::Avatar(a, Some(r)))
+                .map_err(|e| e.to_string())
+            };
+            let _ = tx.send(run());
+        });
+        self.loading = Some(Loading {
+            path: SYNTHETIC_PHOTO.into(),
+            started: Instant::now(),
+            rx,
+            stage,
+            cancel,
+        });
+    }
+
+    /// Shows an avatar if it fits the current body; otherwise keeps what is shown.
+    fn accept_avatar(
+        &mut self,
+        path: &Path,
+        avatar: Avatar,
+        report: Option<guava::reconstruct::Report>,
+    ) {
+        let Some(body) = &mut self.body else {
+            return self.error("no body to pose the avatar on".into());
+        };
+        if let Err(e) = avatar.check_body(&body.model) {
+            return self.error(format!("{}: {e}; the current view is kept", path.display()));
+        }
+        avatar.apply_identity(&body.model, &mut body.pose);
+        let mut label = format!("{} — {}", avatar.kind.label(), avatar.source);
+        if let Some(r) = &report {
+            let ms: f64 = r.timings.iter().map(|(_, d)| d.as_secs_f64() * 1e3).sum();
+            label.push_str(&format!(
+                "; {} of {} texels seen, {} mirrored, rest inpainted; {ms:.0} ms",
+                r.observed, r.texels, r.mirrored
+            ));
+        }
+        self.status = Some((
+            format!(
+                "{}: {} Gaussians ({} template + {} UV), {} channels",
+                file_name(path),
+                avatar.len(),
+                avatar.template.len(),
+                avatar.uv.local.len(),
+                avatar.channels
+            ),
+            false,
+        ));
+        self.avatar = Some(AvatarState::new(avatar, label));
+        self.view = View::Avatar;
+        self.reset_camera();
+    }
+
+    fn save_avatar_dialog(&mut self) {
+        let Some(state) = &self.avatar else { return };
+        let stem = Path::new(&state.avatar.source)
+            .file_stem()
+            .map_or_else(|| "avatar".into(), |s| s.to_string_lossy().into_owned());
+        let Some(path) = rfd::FileDialog::new()
+            .add_filter("guava-rs avatar", &["guava"])
+            .set_file_name(format!("{stem}.guava"))
+            .save_file()
+        else {
+            return;
+        };
+        match state.avatar.save(&path) {
+            Ok(()) => self.status = Some((format!("saved {}", path.display()), false)),
+            Err(e) => self.error(e.to_string()),
+        }
     }
 
     fn error(&mut self, message: String) {
@@ -366,6 +528,7 @@ impl GuavaApp {
                         let label = format!("{} — {}", file_name(&path), imported.tracking.source);
                         self.set_motion(label, imported);
                     }
+                    Ok(Loaded::Avatar(avatar, report)) => self.accept_avatar(&path, avatar, report),
                     Err(e) => self.error(e),
                 }
             }
@@ -410,8 +573,10 @@ impl GuavaApp {
                 if ui.button("Open…").clicked() {
                     if let Some(path) = rfd::FileDialog::new()
                         .add_filter(
-                            "3DGS PLY, body template or motion",
-                            &["ply", "glb", "json", "csv", "npz"],
+                            "3DGS PLY, body template, avatar, photo or motion",
+                            &[
+                                "ply", "glb", "guava", "png", "jpg", "jpeg", "json", "csv", "npz",
+                            ],
                         )
                         .pick_file()
                     {
@@ -423,11 +588,22 @@ impl GuavaApp {
                     self.open_test_scene();
                     ui.close();
                 }
+                if ui.button("Reconstruct synthetic photo").clicked() {
+                    self.reconstruct_synthetic_photo();
+                    ui.close();
+                }
                 if ui
                     .add_enabled(self.scene.is_some(), egui::Button::new("Save PLY as…"))
                     .clicked()
                 {
                     self.save_ply_dialog();
+                    ui.close();
+                }
+                if ui
+                    .add_enabled(self.avatar.is_some(), egui::Button::new("Save avatar as…"))
+                    .clicked()
+                {
+                    self.save_avatar_dialog();
                     ui.close();
                 }
                 ui.separator();
@@ -454,7 +630,7 @@ impl GuavaApp {
                     self.orbit = OrbitCamera::framing(&scene.cloud, fov);
                 }
             }
-            View::Body => {
+            View::Body | View::Avatar => {
                 if let Some(body) = &mut self.body {
                     let (lo, hi) = body.bounds();
                     self.orbit = OrbitCamera {
@@ -472,7 +648,20 @@ impl GuavaApp {
             self.view_choice_ui(ui);
         });
         ui.separator();
-        if self.view == View::Body {
+        if let (View::Avatar, Some(avatar)) = (self.view, &self.avatar) {
+            ui.heading("Avatar");
+            ui.label(&avatar.label);
+            let a = &avatar.avatar;
+            ui.label(format!(
+                "{} Gaussians: {} template + {} UV · {} channels (RGB, source confidence)",
+                a.len(),
+                a.template.len(),
+                a.uv.local.len(),
+                a.channels
+            ));
+            ui.separator();
+        }
+        if matches!(self.view, View::Body | View::Avatar) {
             ui.heading("Body");
             match &mut self.body {
                 Some(body) => body.ui(ui),
@@ -594,6 +783,7 @@ impl GuavaApp {
         let showing = match self.view {
             View::Gaussians => self.scene.is_some(),
             View::Body => self.body.is_some(),
+            View::Avatar => self.avatar.is_some() && self.body.is_some(),
         };
         if !showing {
             self.empty_state_ui(ui, rect);
@@ -622,19 +812,29 @@ impl GuavaApp {
         if w == 0 || h == 0 {
             return;
         }
+        let splats = |scene: SceneRef| {
+            let mut background = vec![0.0; scene.cloud.channels];
+            for (c, v) in background.iter_mut().zip(self.background) {
+                *c = v;
+            }
+            Content::Splats {
+                scene,
+                background,
+                display: self.display.clone(),
+            }
+        };
         let content = match (self.view, &self.scene, &mut self.body) {
-            (View::Gaussians, Some(scene), _) => {
-                let mut background = vec![0.0; scene.cloud.channels];
-                for (c, v) in background.iter_mut().zip(self.background) {
-                    *c = v;
-                }
-                Content::Splats {
-                    scene: SceneRef {
-                        generation: scene.generation,
-                        cloud: scene.cloud.clone(),
-                    },
-                    background,
-                    display: self.display.clone(),
+            (View::Gaussians, Some(scene), _) => splats(SceneRef {
+                generation: scene.generation,
+                cloud: scene.cloud.clone(),
+            }),
+            (View::Avatar, _, Some(body)) => {
+                let Some(avatar) = &mut self.avatar else {
+                    return;
+                };
+                match avatar.scene(body, &mut self.next_generation) {
+                    Some(scene) => splats(scene),
+                    None => return,
                 }
             }
             (View::Body, _, Some(body)) => match body.frame(self.background) {
@@ -662,10 +862,14 @@ impl GuavaApp {
         child.heading("Nothing loaded");
         child.label("Drop a 3DGS .ply file here, or use File > Open…");
         child.label("(Body templates, .glb, open in the Body mesh view.)");
-        child.label("Photo-to-avatar reconstruction is not implemented yet.");
+        child
+            .label("(A photo .png/.jpg with its tracking .json beside it reconstructs an avatar.)");
         child.add_space(8.0);
         if child.button("Open test scene").clicked() {
             self.open_test_scene();
+        }
+        if child.button("Reconstruct synthetic photo").clicked() {
+            self.reconstruct_synthetic_photo();
         }
     }
 
@@ -711,6 +915,40 @@ impl GuavaApp {
     }
 }
 
+/// The name the synthetic demo photo goes by in the UI and in the avatar it makes.
+const SYNTHETIC_PHOTO: &str = "synthetic photo of the default body (known-answer demo)";
+
+/// A progress callback for reconstruction: publishes the stage, stops when cancelled.
+fn progress<'a>(
+    stage: &'a Mutex<&'static str>,
+    cancel: &'a AtomicBool,
+) -> impl FnMut(guava::reconstruct::Stage) -> bool + 'a {
+    move |s| {
+        *stage.lock().unwrap_or_else(|e| e.into_inner()) = s.name();
+        !cancel.load(Ordering::Relaxed)
+    }
+}
+
+fn reconstruct_worker(
+    body: &BodyModel,
+    photo: &Path,
+    tracking: &Path,
+    stage: &Mutex<&'static str>,
+    cancel: &AtomicBool,
+) -> Result<Loaded, String> {
+    *stage.lock().unwrap_or_else(|e| e.into_inner()) = "building the UV map";
+    let uv = guava::reconstruct::UvMap::for_body(body, guava::reconstruct::DEFAULT_UV_SIZE);
+    guava::reconstruct::reconstruct_photo_file(
+        body,
+        &uv,
+        photo,
+        tracking,
+        &mut progress(stage, cancel),
+    )
+    .map(|(a, r)| Loaded::Avatar(a, Some(r)))
+    .map_err(|e| e.to_string())
+}
+
 fn file_name(path: &Path) -> String {
     path.file_name().map_or_else(
         || path.display().to_string(),
@@ -751,12 +989,14 @@ impl eframe::App for GuavaApp {
             ui.horizontal(|ui| {
                 if let Some(loading) = &self.loading {
                     ui.spinner();
+                    let stage = *loading.stage.lock().unwrap_or_else(|e| e.into_inner());
                     ui.label(format!(
-                        "loading {} ({:.1} s)",
+                        "{} — {stage} ({:.1} s)",
                         loading.path.display(),
                         loading.started.elapsed().as_secs_f32()
                     ));
                     if ui.button("Cancel").clicked() {
+                        loading.cancel.store(true, Ordering::Relaxed);
                         self.loading = None;
                         self.status = Some(("loading cancelled".into(), false));
                     }
@@ -771,7 +1011,7 @@ impl eframe::App for GuavaApp {
                 }
             });
         });
-        if let (Some(motion), View::Body) = (&mut self.motion, self.view) {
+        if let (Some(motion), View::Body | View::Avatar) = (&mut self.motion, self.view) {
             egui::Panel::bottom("timeline").show(ui, |ui| motion.timeline_ui(ui));
         }
         egui::Panel::left("scene").resizable(true).show(ui, |ui| {

@@ -82,6 +82,13 @@ impl BodyState {
         self.pose_generation += 1;
     }
 
+    /// The posed body and its pose generation (which changes with every re-pose), re-posed first
+    /// if the pose changed.
+    pub fn posed(&mut self) -> (&PosedBody, u64) {
+        self.update();
+        (&self.posed, self.pose_generation)
+    }
+
     /// The posed mesh for the viewport, re-posed first if a slider moved.
     pub fn frame(&mut self, background: [f32; 3]) -> Option<BodyFrame> {
         self.update();

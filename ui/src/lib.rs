@@ -2,6 +2,7 @@
 //! (or the body mesh view) on egui's own wgpu device.
 
 pub mod app;
+pub mod avatar_view;
 pub mod body_panel;
 pub mod motion;
 pub mod orbit;

@@ -8,7 +8,8 @@ use std::sync::Arc;
 #[derive(Parser)]
 #[command(name = "guava-viewer", version, about = "GUAVA avatar viewer")]
 struct Args {
-    /// A file to open: 3DGS .ply, body template .glb, or a motion (.json, ARKit .csv, SMPL-X .npz).
+    /// A file to open: 3DGS .ply, body template .glb, avatar .guava, a photo (.png/.jpg, with its
+    /// tracking .json beside it) to reconstruct, or a motion (.json, ARKit .csv, SMPL-X .npz).
     file: Option<PathBuf>,
     /// Start with the synthetic test scene.
     #[arg(long)]

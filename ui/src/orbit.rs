@@ -2,7 +2,7 @@
 //! double-click to reframe. Produces the library's [`Camera`] for the splatting pass.
 
 use glam::{Mat4, Vec3};
-use guava::camera::{Camera, orbit};
+use guava::camera::{Camera, orbit, orbit_y_up};
 use guava::gaussians::GaussianCloud;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,10 +53,7 @@ impl OrbitCamera {
 
     pub fn view_from_world(&self) -> Mat4 {
         if self.y_up {
-            // Turn a y-up, +z-facing world half a turn about x: yaw 0 then faces its front.
-            let flip = Mat4::from_diagonal(glam::Vec4::new(1.0, -1.0, -1.0, 1.0));
-            let target = flip.transform_point3(self.target);
-            orbit(target, self.distance, self.yaw_rad, self.pitch_rad) * flip
+            orbit_y_up(self.target, self.distance, self.yaw_rad, self.pitch_rad)
         } else {
             orbit(self.target, self.distance, self.yaw_rad, self.pitch_rad)
         }

@@ -276,3 +276,75 @@ fn motion_files_open_and_bad_ones_keep_the_current_motion() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
+    use guava::reconstruct::{SourceView, synthetic};
+    let mut h = harness(Options::default());
+    h.run();
+    let dir = std::env::temp_dir().join(format!("guava-ui-avatar-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let body = guava::body::BodyModel::default_body().expect("body");
+    let view = SourceView {
+        pose: guava::body::BodyPose::rest(&body),
+        camera: synthetic::upper_body_camera(&body, 0.2),
+    };
+    let photo = dir.join("person.png");
+    synthetic::photo(&body, &view.pose, &view.camera, synthetic::banded_texture)
+        .expect("photo")
+        .save(&photo)
+        .expect("write photo");
+    synthetic::tracking_of(&body, &view, "test")
+        .save(&dir.join("person.json"))
+        .expect("write tracking");
+
+    h.state_mut().open(photo);
+    wait_until(&mut h, |app| app.avatar_info().is_some());
+    let (label, count) = h.state().avatar_info().expect("reconstructed");
+    assert!(
+        label.starts_with("default reconstruction (not the learned GUAVA model) — person.png"),
+        "{label}"
+    );
+    assert!(count > 100_000 && count < 150_000, "{count}");
+    assert_eq!(h.state().view(), View::Avatar);
+    // The avatar goes through the splatting pass, and a pose change re-rigs and re-renders it.
+    let start = Instant::now();
+    while h.state().report().stats.is_none() && start.elapsed() < Duration::from_secs(120) {
+        frame(&mut h);
+    }
+    let stats = h.state().report().stats.expect("splat stats reach the HUD");
+    assert_eq!(stats.input as usize, count);
+    assert!(stats.visible > 50_000, "{stats:?}");
+    let before = h.state().report().renders;
+    frame(&mut h);
+    assert_eq!(
+        h.state().report().renders,
+        before,
+        "an unchanged pose is not re-splatted"
+    );
+    let body_state = h.state_mut().body_mut().expect("body");
+    let model = body_state.model.clone();
+    body_state
+        .pose
+        .set_rotation(
+            model.as_ref(),
+            "upperarm01.L",
+            glam::Vec3::new(0.0, 0.0, 1.2),
+        )
+        .expect("joint");
+    frame(&mut h);
+    assert_eq!(
+        h.state().report().renders,
+        before + 1,
+        "a pose change splats once"
+    );
+
+    // A broken avatar file is reported by name and the avatar stays.
+    let bad = dir.join("broken.guava");
+    std::fs::write(&bad, "guava-rs avatar 1\n{\"kind\":\n").expect("write");
+    h.state_mut().open(bad);
+    let status = wait_for_status(&mut h, "broken.guava");
+    assert!(status.contains("broken.guava: header"), "{status}");
+    assert_eq!(h.state().avatar_info().map(|(_, n)| n), Some(count));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,0 +1,136 @@
+//! An animatable Gaussian avatar: GUAVA's two Gaussian sets bound to a body model (paper Sec. 3).
+//!
+//! - *Template Gaussians*, one per body vertex: they sit on the posed vertex and turn with its
+//!   skinning transform.
+//! - *UV Gaussians*, one per kept UV texel: bound to a triangle by barycentrics, with an offset,
+//!   rotation and scale in that triangle's frame, so they ride the posed surface.
+//!
+//! Reconstruction makes one ([`crate::reconstruct`]); [`animate`] turns it into a
+//! [`GaussianCloud`] for any pose of its body; [`file`] saves and loads it bit-identically.
+
+mod animate;
+pub mod file;
+
+pub use animate::{Rig, quat_from_matrix, quat_mul};
+pub use file::{AVATAR_FORMAT, AvatarFileError};
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::body::{BodyModel, BodyPose};
+
+/// Which pipeline made an avatar; shown to the user, never conflated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AvatarKind {
+    /// Our default reconstruction (no learned weights): photo colours on surface discs.
+    DefaultReconstruction,
+    /// GUAVA's learned decoders (GUAVA mode).
+    Guava,
+}
+
+impl AvatarKind {
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::DefaultReconstruction => "default reconstruction (not the learned GUAVA model)",
+            Self::Guava => "GUAVA reconstruction",
+        }
+    }
+}
+
+/// Per-Gaussian attributes in the local frame they are bound to; activated values (linear
+/// scale, opacity in [0, 1]); quaternions (w, x, y, z).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LocalGaussians {
+    pub rotations: Vec<[f32; 4]>,
+    pub scales: Vec<[f32; 3]>,
+    pub opacities: Vec<f32>,
+    /// `channels` values per Gaussian; the first three are RGB in [0, 1].
+    pub features: Vec<f32>,
+}
+
+impl LocalGaussians {
+    pub fn len(&self) -> usize {
+        self.opacities.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.opacities.is_empty()
+    }
+}
+
+/// UV Gaussians: where each is bound, and its attributes in the triangle's frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct UvGaussians {
+    pub triangles: Vec<u32>,
+    pub barycentrics: Vec<[f32; 3]>,
+    /// Offset from the barycentric point, in units of the triangle's scale σ, in its frame.
+    pub offsets: Vec<[f32; 3]>,
+    /// Scales are in units of σ; rotations are relative to the triangle frame.
+    pub local: LocalGaussians,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Avatar {
+    pub kind: AvatarKind,
+    /// The body model the Gaussians are bound to, by name and size (checked when animating).
+    pub body: String,
+    pub body_vertices: usize,
+    pub body_triangles: usize,
+    pub channels: usize,
+    /// The source's identity coefficients (shape) by parameter name; every pose uses them.
+    pub identity: BTreeMap<String, f32>,
+    /// Where it came from (the photo's file name), shown to the user.
+    pub source: String,
+    /// One per body vertex, in vertex order; rotations relative to the vertex's skinning rotation.
+    pub template: LocalGaussians,
+    pub uv: UvGaussians,
+}
+
+impl Avatar {
+    /// Whether `body` is the model this avatar is bound to (name, size, identity parameters).
+    pub fn check_body(&self, body: &BodyModel) -> Result<(), String> {
+        if body.name != self.body
+            || body.vertices.len() != self.body_vertices
+            || body.triangles.len() != self.body_triangles
+        {
+            return Err(format!(
+                "the avatar is bound to body {:?} ({} vertices, {} triangles), not {:?} ({} vertices, {} triangles)",
+                self.body,
+                self.body_vertices,
+                self.body_triangles,
+                body.name,
+                body.vertices.len(),
+                body.triangles.len()
+            ));
+        }
+        match self
+            .identity
+            .keys()
+            .find(|n| body.target_index(n).is_none())
+        {
+            Some(name) => Err(format!(
+                "identity parameter {name:?} is not one of the body's"
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// Sets the avatar's identity coefficients on `pose` (a pose of the body it is bound to).
+    pub fn apply_identity(&self, body: &BodyModel, pose: &mut BodyPose) {
+        for (name, &value) in &self.identity {
+            if let Some(i) = body.target_index(name) {
+                pose.coefficients[i] = value;
+            }
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.template.len() + self.uv.local.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}

@@ -1,0 +1,101 @@
+//! `guava bench reconstruct`: the default reconstruction of a synthetic photo of the default body
+//! on one CPU thread, per stage (the UV map is built once per body and timed apart), then
+//! animating the avatar for one frame of the demo motion (posing + rigging its Gaussians).
+
+use std::time::{Duration, Instant};
+
+use super::body::cpu_name;
+use super::median;
+use crate::avatar::Rig;
+use crate::body::{BodyModel, BodyPose, PosedBody};
+use crate::gaussians::GaussianCloud;
+use crate::reconstruct::synthetic::{banded_texture, photo, upper_body_camera};
+use crate::reconstruct::{
+    DEFAULT_UV_SIZE, SourceImage, SourceView, Stage, UvMap, reconstruct_default,
+};
+use crate::tracking::{Retarget, demo_motion};
+
+#[derive(clap::Args, Clone, Debug)]
+pub struct ReconstructBenchArgs {
+    /// Timed repetitions (after 2 warm-up runs).
+    #[arg(long, default_value_t = 20)]
+    pub iterations: usize,
+}
+
+pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
+    let body = BodyModel::default_body()?;
+    let t = Instant::now();
+    let uv = UvMap::for_body(&body, DEFAULT_UV_SIZE);
+    let uv_ms = t.elapsed().as_secs_f64() * 1e3;
+    let view = SourceView {
+        pose: BodyPose::rest(&body),
+        camera: upper_body_camera(&body, 0.3),
+    };
+    let image = photo(&body, &view.pose, &view.camera, banded_texture)?;
+    println!(
+        "default reconstruction of a synthetic 512² photo of the default body ({} valid texels of {}²), \
+         one thread on {}, medians of {}",
+        uv.len(),
+        uv.size,
+        cpu_name(),
+        args.iterations
+    );
+    let mut per_stage: Vec<Vec<f64>> = vec![Vec::new(); Stage::ALL.len() + 2];
+    let mut avatar = None;
+    for i in 0..args.iterations + 2 {
+        let t0 = Instant::now();
+        let source = SourceImage::from_rgba(&image, true, "synthetic")?;
+        let load = t0.elapsed();
+        let (a, report) =
+            reconstruct_default(&body, &uv, &view, source, "synthetic", &mut |_| true)?;
+        if i >= 2 {
+            per_stage[0].push(ms(load));
+            for (k, (_, d)) in report.timings.iter().enumerate() {
+                per_stage[k + 1].push(ms(*d));
+            }
+            per_stage[Stage::ALL.len() + 1].push(ms(t0.elapsed()));
+        }
+        avatar = Some(a);
+    }
+    let avatar = avatar.expect("ran at least once");
+    println!("{:<34} {:>10}", "stage", "ms");
+    println!("{:<34} {:>10.2}", "UV map + mirror (once per body)", uv_ms);
+    let names = std::iter::once("crop + resize + mask")
+        .chain(Stage::ALL.iter().map(|s| s.name()))
+        .chain(std::iter::once("total per photo"));
+    for (name, times) in names.zip(per_stage) {
+        println!("{:<34} {:>10.2}", name, median(times));
+    }
+
+    // One frame of animation: pose the body from the demo motion, rig the Gaussians.
+    let motion = demo_motion()?;
+    let retarget = Retarget::new(&motion, &body);
+    let mut pose = BodyPose::rest(&body);
+    let (mut posed, mut rig, mut cloud) =
+        (PosedBody::default(), Rig::default(), GaussianCloud::new(4));
+    let (mut pose_ms, mut rig_ms) = (Vec::new(), Vec::new());
+    for i in 0..args.iterations * 5 + 5 {
+        let time = i as f64 / 30.0 % motion.duration();
+        let t0 = Instant::now();
+        retarget.sample(&motion, time, &mut pose);
+        avatar.apply_identity(&body, &mut pose);
+        body.pose(&pose, &mut posed)?;
+        let t1 = Instant::now();
+        rig.animate(&avatar, &posed, &body.triangles, &mut cloud)?;
+        if i >= 5 {
+            pose_ms.push(ms(t1 - t0));
+            rig_ms.push(ms(t1.elapsed()));
+        }
+    }
+    println!(
+        "animation per frame ({} Gaussians): pose body {:.2} ms, rig Gaussians {:.2} ms",
+        avatar.len(),
+        median(pose_ms),
+        median(rig_ms)
+    );
+    Ok(())
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}

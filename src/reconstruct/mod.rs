@@ -1,0 +1,258 @@
+//! Reconstruction from one photo (paper Sec. 3): the tracked source pose and camera, the photo,
+//! and the body model in; an animatable [`Avatar`] out.
+//!
+//! Stages, each timed: pose the body in the source pose → rasterize it from the source camera
+//! (z-buffer, and the person mask when the photo has no alpha) → inverse texture mapping of the
+//! photo into the body's UV map with per-texel visibility → fill what the camera did not see
+//! (default mode) → Gaussians bound to the surface.
+//!
+//! This is the **default reconstruction** (no GUAVA weights; the learned decoders plug in after
+//! the same inverse texture mapping in GUAVA mode).
+
+pub mod default_mode;
+pub mod fill;
+pub mod raster;
+pub mod source;
+pub mod synthetic;
+pub mod texture;
+pub mod uv_map;
+
+use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
+
+use crate::avatar::Avatar;
+use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, TargetGroup};
+use crate::camera::Camera;
+use crate::tracking::{Retarget, Tracking, TrackingError, camera_at};
+pub use default_mode::{DEFAULT_CHANNELS, DiscStyle};
+pub use source::{SOURCE_SIZE, SourceImage};
+pub use uv_map::UvMap;
+
+/// The default reconstruction's UV map side: at 448² the Anny body has ~126k valid texels, which
+/// with its 15,066 template Gaussians stays under GUAVA's ~150k total.
+pub const DEFAULT_UV_SIZE: u32 = 448;
+
+#[derive(Debug, thiserror::Error)]
+pub enum ReconstructError {
+    #[error("{file}: {problem}")]
+    Image { file: String, problem: String },
+    #[error("{file}: {problem}")]
+    Tracking { file: String, problem: String },
+    #[error(
+        "the tracked camera sees none of the body's surface in the photo (is the tracking file the \
+         photo's, and does the photo show the person?)"
+    )]
+    NothingVisible,
+    #[error(transparent)]
+    TrackingFile(#[from] TrackingError),
+    #[error(transparent)]
+    Pose(#[from] PoseError),
+    #[error("cancelled")]
+    Cancelled,
+}
+
+/// The stages, in order, for progress reports and timings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    Pose,
+    Rasterize,
+    TextureMap,
+    Fill,
+    Gaussians,
+}
+
+impl Stage {
+    pub const ALL: [Stage; 5] = [
+        Stage::Pose,
+        Stage::Rasterize,
+        Stage::TextureMap,
+        Stage::Fill,
+        Stage::Gaussians,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Pose => "pose source body",
+            Stage::Rasterize => "rasterize (visibility, mask)",
+            Stage::TextureMap => "inverse texture mapping",
+            Stage::Fill => "fill (mirror, push-pull)",
+            Stage::Gaussians => "build Gaussians",
+        }
+    }
+}
+
+/// What a reconstruction reports besides the avatar.
+#[derive(Clone, Debug, Default)]
+pub struct Report {
+    pub timings: Vec<(Stage, Duration)>,
+    pub texels: usize,
+    pub observed: usize,
+    pub mirrored: usize,
+    /// Whether the person mask came from the photo's alpha (else the body's silhouette).
+    pub mask_from_alpha: bool,
+}
+
+/// The tracked source: pose and camera of the photo.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SourceView {
+    pub pose: BodyPose,
+    pub camera: Camera,
+}
+
+impl SourceView {
+    /// Frame 0 of `tracking`, retargeted onto `body`; the camera is the frame's tracked camera at
+    /// the source size. `file` names the tracking file in errors.
+    pub fn from_tracking(
+        tracking: &Tracking,
+        body: &BodyModel,
+        file: &str,
+    ) -> Result<Self, ReconstructError> {
+        if tracking.frames.is_empty() {
+            return Err(ReconstructError::Tracking {
+                file: file.into(),
+                problem: "has no frame".into(),
+            });
+        }
+        let (w2c, invtanfov) =
+            camera_at(tracking, 0.0).ok_or_else(|| ReconstructError::Tracking {
+                file: file.into(),
+                problem:
+                    "frame 0: camera: missing (reconstruction needs the photo's tracked camera)"
+                        .into(),
+            })?;
+        let mut pose = BodyPose::rest(body);
+        Retarget::new(tracking, body).sample(tracking, 0.0, &mut pose);
+        Ok(Self {
+            pose,
+            camera: Camera::guava(w2c, SOURCE_SIZE, invtanfov),
+        })
+    }
+}
+
+/// The identity coefficients of `pose` (the shape targets it sets), stored with the avatar.
+fn identity_of(body: &BodyModel, pose: &BodyPose) -> BTreeMap<String, f32> {
+    body.targets_in(TargetGroup::Shape)
+        .filter(|(i, _)| pose.coefficients[*i] != 0.0)
+        .map(|(i, t)| (t.name.clone(), pose.coefficients[i]))
+        .collect()
+}
+
+/// Default reconstruction of `photo` seen from `view`. `uv` is the body's UV map (built once per
+/// body, [`UvMap::for_body`]). `progress` hears each stage as it starts and returns `false` to
+/// cancel. `source_name` is stored with the avatar.
+pub fn reconstruct_default(
+    body: &BodyModel,
+    uv: &UvMap,
+    view: &SourceView,
+    mut photo: SourceImage,
+    source_name: &str,
+    progress: &mut dyn FnMut(Stage) -> bool,
+) -> Result<(Avatar, Report), ReconstructError> {
+    let mut report = Report {
+        texels: uv.len(),
+        mask_from_alpha: photo.mask.is_some(),
+        ..Default::default()
+    };
+    let mut clock = StageClock::default();
+    let camera = &view.camera;
+
+    clock.start(Stage::Pose, progress)?;
+    let mut posed = PosedBody::default();
+    body.pose(&view.pose, &mut posed)?;
+
+    clock.start(Stage::Rasterize, progress)?;
+    let fragments = raster::rasterize(&posed.vertices, &body.triangles, camera);
+    if photo.mask.is_none() {
+        photo.apply_mask(fragments.coverage());
+    }
+
+    clock.start(Stage::TextureMap, progress)?;
+    let sampled = texture::inverse_texture_map(
+        uv,
+        &posed.vertices,
+        &body.triangles,
+        camera,
+        &photo,
+        &fragments,
+    );
+    report.observed = sampled.observed();
+
+    clock.start(Stage::Fill, progress)?;
+    let filled = fill::fill(uv, &sampled).ok_or(ReconstructError::NothingVisible)?;
+    report.mirrored = filled
+        .source
+        .iter()
+        .filter(|&&s| s == fill::FillSource::Mirrored)
+        .count();
+
+    clock.start(Stage::Gaussians, progress)?;
+    let avatar = default_mode::build(
+        body,
+        &posed,
+        uv,
+        &filled,
+        &DiscStyle::default(),
+        identity_of(body, &view.pose),
+        source_name.into(),
+    );
+    report.timings = clock.finish();
+    Ok((avatar, report))
+}
+
+/// The tracking file that goes with a photo when none is named: same folder and stem, `.json`.
+pub fn tracking_beside(photo: &std::path::Path) -> std::path::PathBuf {
+    photo.with_extension("json")
+}
+
+/// Reads `photo` and its tracking file and runs [`reconstruct_default`] on `body`; what the CLI
+/// and the viewer's worker call. Every error names the file.
+pub fn reconstruct_photo_file(
+    body: &BodyModel,
+    uv: &UvMap,
+    photo: &std::path::Path,
+    tracking: &std::path::Path,
+    progress: &mut dyn FnMut(Stage) -> bool,
+) -> Result<(Avatar, Report), ReconstructError> {
+    let file = tracking.display().to_string();
+    let tracked = Tracking::load(tracking)?;
+    let view = SourceView::from_tracking(&tracked, body, &file)?;
+    let image = SourceImage::load(photo)?;
+    let name = photo.file_name().map_or_else(
+        || photo.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    reconstruct_default(body, uv, &view, image, &name, progress)
+}
+
+/// Times consecutive stages and asks the progress callback whether to go on.
+#[derive(Default)]
+struct StageClock {
+    current: Option<(Stage, Instant)>,
+    done: Vec<(Stage, Duration)>,
+}
+
+impl StageClock {
+    fn start(
+        &mut self,
+        stage: Stage,
+        progress: &mut dyn FnMut(Stage) -> bool,
+    ) -> Result<(), ReconstructError> {
+        self.stop();
+        if !progress(stage) {
+            return Err(ReconstructError::Cancelled);
+        }
+        self.current = Some((stage, Instant::now()));
+        Ok(())
+    }
+
+    fn stop(&mut self) {
+        if let Some((stage, t)) = self.current.take() {
+            self.done.push((stage, t.elapsed()));
+        }
+    }
+
+    fn finish(mut self) -> Vec<(Stage, Duration)> {
+        self.stop();
+        self.done
+    }
+}

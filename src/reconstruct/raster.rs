@@ -1,0 +1,101 @@
+//! A z-buffer rasterizer for triangle meshes on the CPU: which triangle covers each pixel, where
+//! on it, and how far away. Reconstruction uses it for visibility from the source camera; the
+//! synthetic-photo generator uses it to draw a textured body.
+//!
+//! Pixel centres are at `i + 0.5` in the camera's pixel-edge coordinates (the same centres the
+//! splatting pass shades). No back-face culling (the reference's `cull_backfaces=False`);
+//! barycentrics and depth are perspective-correct.
+
+use crate::camera::Camera;
+use glam::Vec3;
+
+/// Triangles with a corner nearer than this (metres, view z) are left out rather than clipped:
+/// a camera inside the avatar then sees past the triangles at its eye instead of dividing by ~0.
+pub const RASTER_NEAR: f32 = 1e-3;
+
+/// Per pixel: the nearest triangle (or −1), its perspective-correct barycentrics and view depth.
+#[derive(Clone, Debug)]
+pub struct Fragments {
+    pub width: u32,
+    pub height: u32,
+    pub triangle: Vec<i32>,
+    pub bary: Vec<[f32; 3]>,
+    /// View-space z of the visible surface; `f32::INFINITY` where no triangle covers the pixel.
+    pub depth: Vec<f32>,
+}
+
+impl Fragments {
+    pub fn index(&self, x: u32, y: u32) -> usize {
+        (y * self.width + x) as usize
+    }
+
+    /// Covered pixels as a 0/1 mask (the body's silhouette).
+    pub fn coverage(&self) -> Vec<f32> {
+        self.triangle
+            .iter()
+            .map(|&t| if t >= 0 { 1.0 } else { 0.0 })
+            .collect()
+    }
+}
+
+/// Rasterizes `triangles` over `vertices` (world space) as seen by `camera`.
+pub fn rasterize(vertices: &[Vec3], triangles: &[[u32; 3]], camera: &Camera) -> Fragments {
+    let (w, h) = (camera.width, camera.height);
+    let n = w as usize * h as usize;
+    let mut out = Fragments {
+        width: w,
+        height: h,
+        triangle: vec![-1; n],
+        bary: vec![[0.0; 3]; n],
+        depth: vec![f32::INFINITY; n],
+    };
+    let projected: Vec<Vec3> = vertices.iter().map(|&v| camera.project(v)).collect();
+    for (t, tri) in triangles.iter().enumerate() {
+        let p = tri.map(|i| projected[i as usize]);
+        if p.iter().any(|q| !q.is_finite() || q.z <= RASTER_NEAR) {
+            continue;
+        }
+        let area = edge(p[0], p[1], p[2].x, p[2].y);
+        if area == 0.0 || !area.is_finite() {
+            continue;
+        }
+        let lo = p[0].min(p[1]).min(p[2]);
+        let hi = p[0].max(p[1]).max(p[2]);
+        // Pixels whose centre x + 0.5 lies in [lo.x, hi.x].
+        let x0 = (lo.x - 0.5).ceil().max(0.0) as u32;
+        let y0 = (lo.y - 0.5).ceil().max(0.0) as u32;
+        let x1 = ((hi.x - 0.5).floor()).min(w as f32 - 1.0);
+        let y1 = ((hi.y - 0.5).floor()).min(h as f32 - 1.0);
+        if x1 < 0.0 || y1 < 0.0 {
+            continue;
+        }
+        let inv_z = p.map(|q| 1.0 / q.z);
+        for y in y0..=y1 as u32 {
+            let py = y as f32 + 0.5;
+            for x in x0..=x1 as u32 {
+                let px = x as f32 + 0.5;
+                // Screen-space barycentrics; the same sign as the area means inside (either winding).
+                let l0 = edge(p[1], p[2], px, py) / area;
+                let l1 = edge(p[2], p[0], px, py) / area;
+                let l2 = 1.0 - l0 - l1;
+                if l0 < 0.0 || l1 < 0.0 || l2 < 0.0 {
+                    continue;
+                }
+                let wsum = l0 * inv_z[0] + l1 * inv_z[1] + l2 * inv_z[2];
+                let z = 1.0 / wsum;
+                let i = (y * w + x) as usize;
+                if z < out.depth[i] {
+                    out.depth[i] = z;
+                    out.triangle[i] = t as i32;
+                    out.bary[i] = [l0 * inv_z[0] * z, l1 * inv_z[1] * z, l2 * inv_z[2] * z];
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Twice the signed area of (a, b, (x, y)).
+fn edge(a: Vec3, b: Vec3, x: f32, y: f32) -> f32 {
+    (b.x - a.x) * (y - a.y) - (b.y - a.y) * (x - a.x)
+}

@@ -1,0 +1,105 @@
+//! Synthetic photos with known answers: the body, textured with a smooth pattern over its rest
+//! surface, posed and drawn from a known camera, with its exact tracking. Reconstruction tests
+//! and `guava synth-photo` use them; they are labelled synthetic wherever they appear.
+
+use glam::{Mat4, Vec3};
+use image::{Rgba, RgbaImage};
+
+use super::raster::rasterize;
+use super::{SOURCE_SIZE, SourceView};
+use crate::body::{BodyModel, BodyPose, Posable, PoseError, PosedBody, TargetGroup};
+use crate::camera::{Camera, GUAVA_INVTANFOV};
+use crate::tracking::{BodyKind, Frame, TrackedCamera, Tracking};
+
+/// A smooth colour pattern over the rest surface: bands with periods of 0.6–1 m, so a 512²
+/// texture resolves it and an exact reconstruction can match it closely.
+pub fn banded_texture(p: Vec3) -> [f32; 3] {
+    [
+        0.5 + 0.35 * (9.0 * p.y + 2.0 * p.x).sin(),
+        0.5 + 0.35 * (7.0 * p.x + 5.0 * p.z + 1.0).sin(),
+        0.5 + 0.35 * (6.0 * p.y - 4.0 * p.z).cos(),
+    ]
+}
+
+/// The synthetic source camera: GUAVA's (invtanfov 24, 512²) framing the upper body from the
+/// front, `yaw` radians around it (positive turns towards the body's left).
+pub fn upper_body_camera(body: &BodyModel, yaw: f32) -> Camera {
+    let neck = body
+        .joint_index("neck01")
+        .map_or(Vec3::new(0.0, 1.45, 0.0), |j| body.joints[j].rest);
+    // Chest height, and a distance that fits ~0.9 m of height in the 2/24-radian field of view.
+    let target = Vec3::new(0.0, neck.y - 0.25, 0.0);
+    let distance = 0.9 * GUAVA_INVTANFOV / 2.0;
+    let eye = target + distance * Vec3::new(yaw.sin(), 0.0, yaw.cos());
+    Camera::guava(
+        Camera::look_at(eye, target, Vec3::Y),
+        SOURCE_SIZE,
+        GUAVA_INVTANFOV,
+    )
+}
+
+/// The body posed by `pose`, seen by `camera`, coloured by `colour` of each pixel's rest-surface
+/// point; alpha 255 on the body, 0 elsewhere.
+pub fn photo(
+    body: &BodyModel,
+    pose: &BodyPose,
+    camera: &Camera,
+    colour: impl Fn(Vec3) -> [f32; 3],
+) -> Result<RgbaImage, PoseError> {
+    let mut posed = PosedBody::default();
+    body.pose(pose, &mut posed)?;
+    let f = rasterize(&posed.vertices, &body.triangles, camera);
+    let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+    Ok(RgbaImage::from_fn(camera.width, camera.height, |x, y| {
+        let i = f.index(x, y);
+        if f.triangle[i] < 0 {
+            return Rgba([0, 0, 0, 0]);
+        }
+        let tri = body.triangles[f.triangle[i] as usize];
+        let b = f.bary[i];
+        let rest: Vec3 = (0..3).map(|k| b[k] * body.vertices[tri[k] as usize]).sum();
+        let [r, g, bl] = colour(rest);
+        Rgba([q(r), q(g), q(bl), 255])
+    }))
+}
+
+/// A one-frame tracking file for the default body holding `view` exactly.
+pub fn tracking_of(body: &BodyModel, view: &SourceView, source: &str) -> Tracking {
+    let expressions: Vec<usize> = body
+        .targets_in(TargetGroup::Expression)
+        .map(|(i, _)| i)
+        .collect();
+    let mut tracking = Tracking::new(
+        BodyKind::Default,
+        30.0,
+        body.joint_names().map(String::from).collect(),
+        expressions
+            .iter()
+            .map(|&i| body.targets[i].name.clone())
+            .collect(),
+    );
+    tracking.source = source.into();
+    for (i, t) in body.targets_in(TargetGroup::Shape) {
+        if view.pose.coefficients[i] != 0.0 {
+            tracking
+                .identity
+                .parameters
+                .insert(t.name.clone(), view.pose.coefficients[i]);
+        }
+    }
+    let w2c: Mat4 = view.camera.view_from_world;
+    let rows = [0, 1, 2].map(|r| w2c.row(r).to_array());
+    tracking.frames.push(Frame {
+        translation: view.pose.translation.to_array(),
+        rotations: view.pose.rotations.iter().map(|r| r.to_array()).collect(),
+        values: expressions
+            .iter()
+            .map(|&i| view.pose.coefficients[i])
+            .collect(),
+        camera: Some(TrackedCamera {
+            w2c: rows,
+            invtanfov: 2.0 * view.camera.fx / view.camera.width as f32,
+        }),
+    });
+    tracking
+}

@@ -1,0 +1,137 @@
+//! Inverse texture mapping (paper Sec. 3.3): each UV texel's surface point on the posed source
+//! mesh is projected into the source photo and the photo is sampled there; texels the source
+//! camera cannot see get nothing. Visibility is a per-texel depth test against the z-buffer of
+//! the posed mesh, so a hand in front of the chest never paints the chest behind it.
+
+use glam::Vec3;
+
+use super::raster::{Fragments, RASTER_NEAR};
+use super::source::SourceImage;
+use super::uv_map::UvMap;
+use crate::camera::Camera;
+
+/// A texel closer to the camera than the z-buffer by less than this many pixel footprints still
+/// counts as the visible surface: covers the depth change across one pixel on a surface inclined
+/// up to ~80° to the view (tan 80° ≈ 5.7), below which [`MIN_COSINE`] rejects it anyway.
+const DEPTH_TOLERANCE_PIXELS: f32 = 6.0;
+/// Surfaces seen more obliquely than this (cosine of the angle between normal and view ray) are
+/// too foreshortened to sample: one pixel smears over many texels.
+pub const MIN_COSINE: f32 = 0.2;
+/// Texels whose projection lands mostly outside the person mask are not the person.
+const MIN_MASK: f32 = 0.5;
+/// At least this much of the bilinear weight must fall on pixels of the texel's own surface.
+const MIN_OWN_WEIGHT: f32 = 0.25;
+
+/// The source photo in UV space.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UvTexture {
+    pub size: u32,
+    /// Per texel (row-major) colour; zero where not observed.
+    pub rgb: Vec<[f32; 3]>,
+    /// How well the source saw each texel: the cosine between surface normal and view ray,
+    /// times the mask; 0 = not seen (hidden, off-image, outside the mask or too oblique).
+    pub confidence: Vec<f32>,
+}
+
+impl UvTexture {
+    pub fn observed(&self) -> usize {
+        self.confidence.iter().filter(|&&c| c > 0.0).count()
+    }
+}
+
+/// Samples `source` for every valid texel of `uv` on the posed mesh `vertices`/`triangles` seen
+/// by `camera`; `fragments` is that mesh rasterized from `camera` at the source's size.
+pub fn inverse_texture_map(
+    uv: &UvMap,
+    vertices: &[Vec3],
+    triangles: &[[u32; 3]],
+    camera: &Camera,
+    source: &SourceImage,
+    fragments: &Fragments,
+) -> UvTexture {
+    let n = (uv.size * uv.size) as usize;
+    let mut out = UvTexture {
+        size: uv.size,
+        rgb: vec![[0.0; 3]; n],
+        confidence: vec![0.0; n],
+    };
+    let eye = camera
+        .view_from_world
+        .inverse()
+        .transform_point3(Vec3::ZERO);
+    for &texel in &uv.texels {
+        let i = texel as usize;
+        let t = uv.triangle[i];
+        let tri = triangles[t as usize];
+        let [v0, v1, v2] = tri.map(|k| vertices[k as usize]);
+        let p = uv.point(i, vertices, triangles);
+        let normal = (v1 - v0).cross(v2 - v0).normalize_or_zero();
+        let cosine = normal.dot((eye - p).normalize_or_zero()).abs();
+        if cosine < MIN_COSINE {
+            continue;
+        }
+        let q = camera.project(p);
+        if !q.is_finite() || q.z <= RASTER_NEAR {
+            continue;
+        }
+        // Centre-at-integer coordinates, where the bilinear taps are the four nearest pixels.
+        let Some((rgb, mask)) =
+            sample_surface(fragments, source, q.x - 0.5, q.y - 0.5, q.z, t, camera)
+        else {
+            continue;
+        };
+        out.rgb[i] = rgb;
+        out.confidence[i] = cosine * mask;
+    }
+    out
+}
+
+/// The photo's colour (un-premultiplied) and mask at `(x, y)` from the bilinear taps that show
+/// the texel's own surface (its triangle, or within the depth tolerance of depth `z`). `None` if
+/// any tap shows a surface in front of it (hidden), or if too little of the taps is its surface
+/// or the person.
+fn sample_surface(
+    f: &Fragments,
+    source: &SourceImage,
+    x: f32,
+    y: f32,
+    z: f32,
+    triangle: i32,
+    camera: &Camera,
+) -> Option<([f32; 3], f32)> {
+    let tolerance = DEPTH_TOLERANCE_PIXELS * camera.pixel_footprint(z);
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    let (mut rgb, mut mask, mut weight) = ([0.0f32; 3], 0.0f32, 0.0f32);
+    for (px, py, w) in [
+        (x0, y0, (1.0 - fx) * (1.0 - fy)),
+        (x0 + 1, y0, fx * (1.0 - fy)),
+        (x0, y0 + 1, (1.0 - fx) * fy),
+        (x0 + 1, y0 + 1, fx * fy),
+    ] {
+        if w == 0.0 || px < 0 || py < 0 || px >= f.width as i64 || py >= f.height as i64 {
+            continue;
+        }
+        let k = f.index(px as u32, py as u32);
+        let own = f.triangle[k] == triangle || (f.depth[k] - z).abs() <= tolerance;
+        if !own {
+            if f.depth[k] < z - tolerance {
+                return None;
+            }
+            // A farther surface (or the background) behind the silhouette: not this texel's.
+            continue;
+        }
+        let (c, m) = source.pixel(k);
+        for (acc, v) in rgb.iter_mut().zip(c) {
+            *acc += w * v;
+        }
+        mask += w * m;
+        weight += w;
+    }
+    if weight < MIN_OWN_WEIGHT || mask < MIN_MASK * weight {
+        return None;
+    }
+    // The photo is premultiplied by its mask; divide it back out at the silhouette.
+    Some((rgb.map(|c| (c / mask).min(1.0)), (mask / weight).min(1.0)))
+}

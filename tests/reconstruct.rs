@@ -1,0 +1,458 @@
+//! Reconstruction with known answers: synthetic photos of the textured default body from known
+//! cameras and poses (src/reconstruct/synthetic.rs), reconstructed and re-rendered through the
+//! splatting pass; visibility against occluders; degenerate inputs; the avatar file.
+
+mod common;
+
+use glam::{Mat3A, Vec3};
+use guava::avatar::{Avatar, Rig, quat_from_matrix, quat_mul};
+use guava::body::{BodyModel, BodyPose, PosedBody};
+use guava::camera::Camera;
+use guava::gaussians::GaussianCloud;
+use guava::reconstruct::raster::rasterize;
+use guava::reconstruct::synthetic::{banded_texture, photo, upper_body_camera};
+use guava::reconstruct::texture::inverse_texture_map;
+use guava::reconstruct::{
+    DEFAULT_UV_SIZE, ReconstructError, Report, SourceImage, SourceView, UvMap, reconstruct_default,
+};
+use std::sync::OnceLock;
+
+fn body() -> &'static BodyModel {
+    static BODY: OnceLock<BodyModel> = OnceLock::new();
+    BODY.get_or_init(|| BodyModel::default_body().expect("default body"))
+}
+
+fn uv() -> &'static UvMap {
+    static UV: OnceLock<UvMap> = OnceLock::new();
+    UV.get_or_init(|| UvMap::for_body(body(), DEFAULT_UV_SIZE))
+}
+
+fn reconstruct(
+    view: &SourceView,
+    image: &image::RgbaImage,
+) -> Result<(Avatar, Report), ReconstructError> {
+    let source = SourceImage::from_rgba(image, true, "synthetic.png")?;
+    reconstruct_default(body(), uv(), view, source, "synthetic.png", &mut |_| true)
+}
+
+fn cloud_for(avatar: &Avatar, pose: &BodyPose) -> GaussianCloud {
+    let mut posed = PosedBody::default();
+    body().pose(pose, &mut posed).expect("pose");
+    let mut cloud = GaussianCloud::new(avatar.channels);
+    Rig::default()
+        .animate(avatar, &posed, &body().triangles, &mut cloud)
+        .expect("same body");
+    cloud
+}
+
+#[test]
+fn uv_map_texels_lie_on_their_triangles_and_mirror() {
+    let (body, uv) = (body(), uv());
+    println!("{} valid texels of {}²", uv.len(), uv.size);
+    assert!(
+        uv.len() > 100_000 && uv.len() + body.vertices.len() < 150_000,
+        "{}",
+        uv.len()
+    );
+    for &t in &uv.texels {
+        let b = uv.bary[t as usize];
+        assert!(
+            b.iter().all(|&x| (-1e-5..=1.0 + 1e-5).contains(&x)),
+            "{b:?}"
+        );
+        assert!((b.iter().sum::<f32>() - 1.0).abs() < 1e-4);
+        // The barycentric UV point is the texel centre.
+        let tri = body.triangles[uv.triangle[t as usize] as usize];
+        let p: glam::Vec2 = (0..3).map(|k| b[k] * body.uvs[tri[k] as usize]).sum();
+        let s = uv.size as usize;
+        let centre = glam::Vec2::new(
+            ((t as usize % s) as f32 + 0.5) / s as f32,
+            ((t as usize / s) as f32 + 0.5) / s as f32,
+        );
+        assert!(p.distance(centre) < 1e-4, "{p} vs {centre}");
+    }
+    // The mirror texel's surface point is the mirror image, within a texel's footprint.
+    let (mut mirrored, mut worst) = (0, 0.0f32);
+    for &t in &uv.texels {
+        let m = uv.mirror[t as usize];
+        if m < 0 {
+            continue;
+        }
+        mirrored += 1;
+        let p = uv.point(t as usize, &body.vertices, &body.triangles);
+        let q = uv.point(m as usize, &body.vertices, &body.triangles);
+        worst = worst.max(p.distance(Vec3::new(-q.x, q.y, q.z)));
+    }
+    println!("{mirrored} texels mirrored, worst mismatch {worst} m");
+    assert!(mirrored as f32 > 0.95 * uv.len() as f32, "{mirrored}");
+    assert!(worst < 0.02, "mirror point off by {worst} m");
+}
+
+#[test]
+fn rasterizer_is_perspective_correct() {
+    // One slanted triangle: every covered pixel's barycentric point projects onto that pixel's
+    // centre and has the depth the rasterizer reports.
+    let vertices = [
+        Vec3::new(-1.0, -1.0, 4.0),
+        Vec3::new(1.5, -0.5, 9.0),
+        Vec3::new(0.0, 1.2, 5.0),
+    ];
+    let camera = Camera::from_fov_y(glam::Mat4::IDENTITY, 96, 64, 0.9);
+    let f = rasterize(&vertices, &[[0, 1, 2]], &camera);
+    let mut covered = 0;
+    for y in 0..f.height {
+        for x in 0..f.width {
+            let i = f.index(x, y);
+            if f.triangle[i] < 0 {
+                continue;
+            }
+            covered += 1;
+            let b = f.bary[i];
+            let p = b[0] * vertices[0] + b[1] * vertices[1] + b[2] * vertices[2];
+            let q = camera.project(p);
+            assert!((q.x - x as f32 - 0.5).abs() < 1e-3 && (q.y - y as f32 - 0.5).abs() < 1e-3);
+            assert!((q.z - f.depth[i]).abs() < 1e-4 * q.z);
+        }
+    }
+    // The projected triangle's area in pixels, against the pixel count (±perimeter).
+    let p = vertices.map(|v| camera.project(v));
+    let area =
+        0.5 * ((p[1].x - p[0].x) * (p[2].y - p[0].y) - (p[2].x - p[0].x) * (p[1].y - p[0].y)).abs();
+    let perimeter: f32 = (0..3)
+        .map(|k| p[k].truncate().distance(p[(k + 1) % 3].truncate()))
+        .sum();
+    assert!(
+        (covered as f32 - area).abs() < perimeter,
+        "{covered} pixels for an area of {area}"
+    );
+}
+
+/// PSNR (dB) of `render`'s RGB against the photo over the photo's opaque pixels that are not
+/// within `erode` pixels of its silhouette (edges are hard in the photo, soft in splats).
+fn psnr_inside(
+    render: &guava::render::SplatImage,
+    image: &image::RgbaImage,
+    erode: i64,
+) -> (f64, usize) {
+    let (w, h) = (image.width() as i64, image.height() as i64);
+    let opaque = |x: i64, y: i64| {
+        x >= 0 && y >= 0 && x < w && y < h && image.get_pixel(x as u32, y as u32)[3] == 255
+    };
+    let (mut se, mut n) = (0.0, 0usize);
+    for y in 0..h {
+        for x in 0..w {
+            let inside =
+                (-erode..=erode).all(|dy| (-erode..=erode).all(|dx| opaque(x + dx, y + dy)));
+            if !inside {
+                continue;
+            }
+            let i = (y * w + x) as usize;
+            for c in 0..3 {
+                let d = render.plane(c)[i] as f64
+                    - image.get_pixel(x as u32, y as u32)[c] as f64 / 255.0;
+                se += d * d;
+            }
+            n += 1;
+        }
+    }
+    (10.0 * (3.0 * n as f64 / se).log10(), n)
+}
+
+#[test]
+fn reconstruction_re_renders_the_photo() {
+    let body = body();
+    let mut pose = BodyPose::rest(body);
+    pose.set_rotation(body, "head", Vec3::new(0.1, 0.3, 0.0))
+        .expect("joint");
+    let view = SourceView {
+        pose,
+        camera: upper_body_camera(body, 0.0),
+    };
+    let image = photo(body, &view.pose, &view.camera, banded_texture).expect("photo");
+    let (avatar, report) = reconstruct(&view, &image).expect("reconstruct");
+    println!("{report:?}; {} Gaussians", avatar.len());
+    assert!(avatar.len() < 150_000);
+    assert!(report.observed > 20_000, "{report:?}");
+    let cloud = cloud_for(&avatar, &view.pose);
+    let (render, stats) = common::renderer()
+        .render(&cloud, &view.camera, &[0.0; 4])
+        .expect("fits");
+    common::assert_all_finite(&render, "reconstruction");
+    let (psnr, pixels) = psnr_inside(&render, &image, 2);
+    println!("PSNR {psnr:.2} dB over {pixels} pixels; {stats:?}");
+    assert!(
+        pixels > 20_000,
+        "the photo must show the body ({pixels} pixels)"
+    );
+    assert!(psnr >= 30.0, "PSNR {psnr:.2} dB < 30");
+}
+
+#[test]
+fn hidden_texels_get_no_colour_from_the_occluder() {
+    // Seen from the body's left side, the left arm (red) hangs in front of the flank (blue).
+    let body = body();
+    let arm = |p: Vec3| p.x.abs() > 0.21;
+    let texture = |p: Vec3| {
+        if arm(p) {
+            [1.0, 0.0, 0.0]
+        } else {
+            [0.0, 0.0, 1.0]
+        }
+    };
+    let view = SourceView {
+        pose: BodyPose::rest(body),
+        camera: upper_body_camera(body, std::f32::consts::FRAC_PI_2),
+    };
+    let image = photo(body, &view.pose, &view.camera, texture).expect("photo");
+    let source = SourceImage::from_rgba(&image, true, "side.png").expect("image");
+    let fragments = rasterize(&body.vertices, &body.triangles, &view.camera);
+    let uv = uv();
+    let sampled = inverse_texture_map(
+        uv,
+        &body.vertices,
+        &body.triangles,
+        &view.camera,
+        &source,
+        &fragments,
+    );
+    let (mut behind_arm, mut torso_seen, mut arm_seen) = (0, 0, 0);
+    for &t in &uv.texels {
+        let i = t as usize;
+        let p = uv.point(i, &body.vertices, &body.triangles);
+        let q = view.camera.project(p);
+        let (x, y) = (q.x.floor() as u32, q.y.floor() as u32);
+        // Behind the arm: the photo's pixel shows red arm at least 5 cm nearer than the texel
+        // (the depth tolerance is ~1 cm at this distance).
+        let on_red = x < 512
+            && y < 512
+            && image.get_pixel(x, y)[0] == 255
+            && fragments.depth[fragments.index(x, y)] < q.z - 0.05;
+        let seen = sampled.confidence[i] > 0.0;
+        let [r, _, b] = sampled.rgb[i];
+        if arm(p) {
+            arm_seen += seen as usize;
+            continue;
+        }
+        if on_red && p.x > 0.0 {
+            behind_arm += 1;
+            assert!(
+                !seen,
+                "torso texel at {p} behind the arm was marked visible (rgb {:?})",
+                sampled.rgb[i]
+            );
+        }
+        // Away from the painted arm/torso border (2 cm, ~12 pixels), colours must not mix.
+        if seen && p.x.abs() < 0.19 {
+            torso_seen += 1;
+            assert!(
+                b > r,
+                "torso texel at {p} took the occluder's colour {:?}",
+                sampled.rgb[i]
+            );
+        }
+    }
+    println!(
+        "{behind_arm} torso texels behind the arm, {torso_seen} torso and {arm_seen} arm texels seen"
+    );
+    assert!(
+        behind_arm > 500,
+        "the arm must hide part of the torso ({behind_arm})"
+    );
+    assert!(torso_seen > 5_000 && arm_seen > 1_000);
+}
+
+#[test]
+fn animation_follows_a_rigid_motion_exactly() {
+    let body = body();
+    let view = SourceView {
+        pose: BodyPose::rest(body),
+        camera: upper_body_camera(body, 0.0),
+    };
+    let image = photo(body, &view.pose, &view.camera, banded_texture).expect("photo");
+    let (avatar, _) = reconstruct(&view, &image).expect("reconstruct");
+    let rest = cloud_for(&avatar, &view.pose);
+    let mut moved_pose = view.pose.clone();
+    let axis_angle = Vec3::new(0.3, -1.1, 0.5);
+    moved_pose
+        .set_rotation(body, "root", axis_angle)
+        .expect("root");
+    moved_pose.translation = Vec3::new(0.2, -0.1, 0.4);
+    let moved = cloud_for(&avatar, &moved_pose);
+    // The root turns about its rest position.
+    let root = body.joints[0].rest;
+    let r = glam::Mat3::from_axis_angle(axis_angle.normalize(), axis_angle.length());
+    let q_r = quat_from_matrix(Mat3A::from(r));
+    let mut worst = (0.0f32, 0.0f32, 0.0f32);
+    for i in 0..rest.len() {
+        let p = Vec3::from(rest.positions[i]);
+        let expected = r * (p - root) + root + moved_pose.translation;
+        worst.0 = worst
+            .0
+            .max(expected.distance(Vec3::from(moved.positions[i])));
+        let q = quat_mul(q_r, rest.rotations[i]);
+        let dot: f32 = q.iter().zip(&moved.rotations[i]).map(|(a, b)| a * b).sum();
+        worst.1 = worst.1.max(1.0 - dot.abs());
+        let s = rest.scales[i]
+            .iter()
+            .zip(&moved.scales[i])
+            .map(|(a, b)| (a - b).abs() / a.max(1e-9));
+        worst.2 = worst.2.max(s.fold(0.0, f32::max));
+    }
+    println!(
+        "rigid motion: position {} m, rotation 1−|q·q'| {}, relative scale {}",
+        worst.0, worst.1, worst.2
+    );
+    assert!(
+        worst.0 < 1e-5 && worst.1 < 1e-5 && worst.2 < 5e-4,
+        "{worst:?}"
+    );
+    assert_eq!(rest.features, moved.features);
+    assert_eq!(rest.opacities, moved.opacities);
+}
+
+#[test]
+fn degenerate_inputs_give_errors_or_sane_results() {
+    let body = body();
+    let view = SourceView {
+        pose: BodyPose::rest(body),
+        camera: upper_body_camera(body, 0.0),
+    };
+    let image = photo(body, &view.pose, &view.camera, banded_texture).expect("photo");
+
+    // Fully transparent alpha.
+    let clear = image::RgbaImage::new(600, 400);
+    let e = SourceImage::from_rgba(&clear, true, "clear.png").expect_err("no person");
+    assert!(
+        e.to_string().contains("clear.png") && e.to_string().contains("transparent"),
+        "{e}"
+    );
+    // Smaller than the crop: upscaled, still works; tiny: a clear error.
+    let small = image::imageops::resize(&image, 128, 128, image::imageops::FilterType::Triangle);
+    let (avatar, report) = reconstruct(&view, &small).expect("upscaled");
+    assert!(report.observed > 10_000 && avatar.validate().is_ok());
+    let tiny = image::RgbaImage::new(20, 300);
+    let e = SourceImage::from_rgba(&tiny, true, "tiny.png").expect_err("too small");
+    assert!(
+        e.to_string().contains("tiny.png") && e.to_string().contains("20×300"),
+        "{e}"
+    );
+
+    // A camera looking away from the body sees nothing: a clear error, not an empty avatar.
+    let mut away = view.clone();
+    let eye = Vec3::new(0.0, 0.3, 10.8);
+    away.camera.view_from_world = Camera::look_at(eye, eye + Vec3::Z, Vec3::Y);
+    assert!(matches!(
+        reconstruct(&away, &image),
+        Err(ReconstructError::NothingVisible)
+    ));
+
+    // Cameras inside the head and edge-on to the body: finite avatars or NothingVisible.
+    let head = body.joints[body.joint_index("head").expect("head")].rest;
+    for (eye, target) in [
+        (head, head + Vec3::Z),
+        (Vec3::new(10.8, 0.3, 0.0), Vec3::new(0.0, 0.3, 0.0)),
+        (Vec3::new(0.0, 10.8, 0.0), Vec3::ZERO),
+    ] {
+        let mut v = view.clone();
+        let up = if (target - eye).normalize().y.abs() > 0.9 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        };
+        v.camera.view_from_world = Camera::look_at(eye, target, up);
+        match reconstruct(&v, &image) {
+            Ok((avatar, _)) => {
+                avatar.validate().expect("finite avatar");
+                let cloud = cloud_for(&avatar, &v.pose);
+                assert!(cloud.positions.iter().flatten().all(|x| x.is_finite()));
+            }
+            Err(ReconstructError::NothingVisible) => {}
+            Err(e) => panic!("camera at {eye}: {e}"),
+        }
+    }
+
+    // NaN in the source pose is treated as zero (and counted by posing), never propagated.
+    let mut nan_view = view.clone();
+    nan_view.pose.rotations[3] = Vec3::NAN;
+    nan_view.pose.translation.x = f32::INFINITY;
+    let (avatar, _) = reconstruct(&nan_view, &image).expect("NaN counts as zero");
+    avatar.validate().expect("finite avatar");
+
+    // Cancelling stops at the next stage.
+    let source = SourceImage::from_rgba(&image, true, "x.png").expect("image");
+    let mut stages = 0;
+    let r = reconstruct_default(body, uv(), &view, source, "x", &mut |_| {
+        stages += 1;
+        stages < 3
+    });
+    assert!(matches!(r, Err(ReconstructError::Cancelled)) && stages == 3);
+}
+
+#[test]
+fn avatar_file_round_trips_bit_identically_and_names_bad_fields() {
+    let body = body();
+    let view = SourceView {
+        pose: BodyPose::rest(body),
+        camera: upper_body_camera(body, 0.4),
+    };
+    let image = photo(body, &view.pose, &view.camera, banded_texture).expect("photo");
+    let (mut avatar, _) = reconstruct(&view, &image).expect("reconstruct");
+    avatar.identity.insert("weight-max".into(), 0.25);
+    let dir = std::env::temp_dir().join(format!("guava-avatar-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let path = dir.join("a.guava");
+    avatar.save(&path).expect("save");
+    let back = Avatar::load(&path).expect("load");
+    assert_eq!(back, avatar);
+    let bits = |a: &Avatar| -> Vec<u32> {
+        a.uv.local
+            .features
+            .iter()
+            .chain(&a.template.features)
+            .map(|x| x.to_bits())
+            .collect()
+    };
+    assert_eq!(bits(&back), bits(&avatar));
+
+    let bytes = std::fs::read(&path).expect("read");
+    let expect_error = |data: &[u8], needle: &str| {
+        let e = Avatar::from_bytes(data, "bad.guava").expect_err(needle);
+        let msg = e.to_string();
+        assert!(
+            msg.starts_with("bad.guava: ") && msg.contains(needle),
+            "{msg}"
+        );
+    };
+    expect_error(b"hello\n{}\n", "not an avatar file");
+    expect_error(&bytes[..bytes.len() - 4], "the arrays take");
+    let header_end = bytes
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| **b == b'\n')
+        .nth(1)
+        .expect("header")
+        .0;
+    let header = String::from_utf8(bytes[..header_end].to_vec()).expect("utf8");
+    let mut swapped = header
+        .replace("\"channels\":4", "\"channels\":99")
+        .into_bytes();
+    swapped.extend_from_slice(&bytes[header_end..]);
+    expect_error(&swapped, "channels is 99");
+    // A NaN opacity in the first UV Gaussian, and a triangle index past the body's.
+    let nt = avatar.template.len();
+    let c = avatar.channels;
+    let uv_start = header_end + 1 + 4 * nt * (8 + c);
+    let mut bad = bytes.clone();
+    bad[uv_start..uv_start + 4].copy_from_slice(&(body.triangles.len() as u32).to_le_bytes());
+    expect_error(&bad, "uv triangles[0]");
+    let nu = avatar.uv.local.len();
+    let opacity0 = uv_start + 4 * (nu * (1 + 3 + 3 + 4 + 3));
+    let mut bad = bytes.clone();
+    bad[opacity0..opacity0 + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    expect_error(&bad, "uv opacities[0]");
+    // A failed save leaves the old file as it was.
+    let missing_dir = dir.join("no/such/dir/a.guava");
+    assert!(avatar.save(&missing_dir).is_err());
+    assert_eq!(std::fs::read(&path).expect("still there"), bytes);
+    std::fs::remove_dir_all(&dir).ok();
+}
