@@ -81,10 +81,22 @@ enum Command {
         /// PNG or JPEG; its alpha channel, if any, is the person mask.
         #[arg(long)]
         image: PathBuf,
-        /// The photo's tracking (frame 0's pose and camera); default: beside the image, .json.
-        #[arg(long)]
+        /// The photo's tracking (frame 0's pose and camera); default: beside the image (.json),
+        /// and without one, a fit to the pose model's keypoints.
+        #[arg(long, conflicts_with = "fit")]
         tracking: Option<PathBuf>,
+        /// Fit the pose and camera to the photo even if a tracking file is beside it.
+        #[arg(long)]
+        fit: bool,
         /// The avatar file to write (.guava).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Fit the default body's pose and GUAVA's camera to a photo's body keypoints (MediaPipe pose
+    /// landmarks through ONNX Runtime) and write them as a tracking file.
+    Fit {
+        #[arg(long)]
+        image: PathBuf,
         #[arg(long)]
         out: PathBuf,
     },
@@ -182,8 +194,10 @@ fn run(cli: Cli) -> Result<()> {
         Command::Reconstruct {
             image,
             tracking,
+            fit: force_fit,
             out,
-        } => reconstruct(&image, tracking.as_deref(), &out),
+        } => reconstruct(&image, tracking.as_deref(), force_fit, &out),
+        Command::Fit { image, out } => fit(&image, &out),
         Command::Motion { file, out, ehm } => motion(&file, out.as_deref(), ehm.as_deref()),
         Command::Bench { which } => match which {
             Bench::Splat(args) => guava::bench::splat(&args),
@@ -252,15 +266,41 @@ fn synth_photo(out: &Path, yaw: f32) -> Result<()> {
     Ok(())
 }
 
-fn reconstruct(image: &Path, tracking: Option<&Path>, out: &Path) -> Result<()> {
-    use guava::reconstruct::{DEFAULT_UV_SIZE, UvMap, reconstruct_photo_file, tracking_beside};
+/// The pose model on the installed ONNX Runtime.
+fn landmarker() -> Result<guava::keypoints::PoseLandmarker> {
+    let runtime = guava::onnx::OnnxRuntime::load()?;
+    Ok(guava::keypoints::PoseLandmarker::load(runtime)?)
+}
+
+fn reconstruct(image: &Path, tracking: Option<&Path>, fit: bool, out: &Path) -> Result<()> {
+    use guava::reconstruct::{
+        DEFAULT_UV_SIZE, MaskSource, Tracked, UvMap, reconstruct_photo_file, tracking_beside,
+    };
     let body = guava::body::BodyModel::default_body()?;
     let uv = UvMap::for_body(&body, DEFAULT_UV_SIZE);
-    let tracking = tracking.map_or_else(|| tracking_beside(image), Path::to_path_buf);
-    let (avatar, report) = reconstruct_photo_file(&body, &uv, image, &tracking, &mut |stage| {
-        eprintln!("  {}…", stage.name());
-        true
-    })?;
+    let beside = tracking_beside(image);
+    let tracked = match tracking {
+        _ if fit => Tracked::Fit,
+        Some(path) => Tracked::File(path),
+        None if beside.is_file() => Tracked::File(&beside),
+        None => Tracked::Fit,
+    };
+    // The pose model gives the mask of a photo without alpha, and the fit; optional otherwise.
+    let mut model = match (&tracked, landmarker()) {
+        (_, Ok(m)) => Some(m),
+        (Tracked::Fit, Err(e)) => return Err(e.context("fitting the photo needs the pose model")),
+        (Tracked::File(_), Err(e)) => {
+            eprintln!(
+                "guava: pose model not available ({e:#}); a photo without alpha is masked by the body's silhouette"
+            );
+            None
+        }
+    };
+    let (avatar, report, _) =
+        reconstruct_photo_file(&body, &uv, image, tracked, model.as_mut(), &mut |stage| {
+            eprintln!("  {}…", stage.name());
+            true
+        })?;
     avatar.save(out)?;
     println!(
         "{}: {} ({} template + {} UV Gaussians, {} channels) → {}",
@@ -271,15 +311,21 @@ fn reconstruct(image: &Path, tracking: Option<&Path>, out: &Path) -> Result<()> 
         avatar.channels,
         out.display()
     );
+    if let Some(f) = &report.fit {
+        println!(
+            "  fitted to {} keypoints: {:.1} px RMS after {} iterations",
+            f.keypoints_used, f.rms_px, f.iterations
+        );
+    }
     println!(
         "  texels: {} valid, {} seen by the camera, {} filled by symmetry, the rest inpainted; mask from {}",
         report.texels,
         report.observed,
         report.mirrored,
-        if report.mask_from_alpha {
-            "the alpha channel"
-        } else {
-            "the tracked body's silhouette (no alpha)"
+        match report.mask {
+            MaskSource::Alpha => "the alpha channel",
+            MaskSource::Segmentation => "the pose model's person segmentation",
+            MaskSource::Silhouette => "the tracked body's silhouette",
         }
     );
     let total: f64 = report.timings.iter().map(|(_, d)| d.as_secs_f64()).sum();
@@ -287,6 +333,43 @@ fn reconstruct(image: &Path, tracking: Option<&Path>, out: &Path) -> Result<()> 
         println!("  {:32} {:8.1} ms", stage.name(), d.as_secs_f64() * 1e3);
     }
     println!("  {:32} {:8.1} ms", "total", total * 1e3);
+    Ok(())
+}
+
+/// Fits the default body to a photo's keypoints and writes the result as a tracking file.
+fn fit(image: &Path, out: &Path) -> Result<()> {
+    use guava::reconstruct::{SourceImage, synthetic::tracking_of};
+    let body = guava::body::BodyModel::default_body()?;
+    let source = SourceImage::load(image)?;
+    let mut model = landmarker()?;
+    let t0 = std::time::Instant::now();
+    let input = guava::keypoints::downsample_to_input(&source.rgb, source.size as usize);
+    let found = model.run(&input, source.size as f32)?;
+    let t1 = std::time::Instant::now();
+    let (view, report) = guava::fit::fit_keypoints(&body, &found.keypoints, source.size)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", image.display()))?;
+    let t2 = std::time::Instant::now();
+    let name = image.file_name().unwrap_or_default().to_string_lossy();
+    tracking_of(
+        &body,
+        &view,
+        &format!("fitted by guava fit to {name}: pose_landmark_full keypoints, default body"),
+    )
+    .save(out)?;
+    println!(
+        "{}: person presence {:.2}; fitted to {} keypoints, {:.1} px RMS, {} iterations → {}",
+        image.display(),
+        found.presence,
+        report.keypoints_used,
+        report.rms_px,
+        report.iterations,
+        out.display()
+    );
+    println!(
+        "  keypoint model {:.0} ms, fit {:.0} ms",
+        (t1 - t0).as_secs_f64() * 1e3,
+        (t2 - t1).as_secs_f64() * 1e3
+    );
     Ok(())
 }
 

@@ -70,8 +70,20 @@ fn library_file_name() -> &'static str {
 }
 
 impl OnnxRuntime {
-    /// Finds and loads the library. Loading happens once per process; later calls reuse it.
-    pub fn load() -> Result<Self, OnnxError> {
+    /// The process's runtime: found and loaded on first use, then shared (ONNX Runtime allows one
+    /// environment per process). A failed load is retried on the next call.
+    pub fn load() -> Result<&'static Self, OnnxError> {
+        static SHARED: std::sync::Mutex<Option<&'static OnnxRuntime>> = std::sync::Mutex::new(None);
+        let mut shared = SHARED.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(runtime) = *shared {
+            return Ok(runtime);
+        }
+        let runtime: &'static Self = Box::leak(Box::new(Self::find_and_load()?));
+        *shared = Some(runtime);
+        Ok(runtime)
+    }
+
+    fn find_and_load() -> Result<Self, OnnxError> {
         let candidates = candidate_paths();
         let path = candidates
             .iter()

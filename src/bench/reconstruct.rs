@@ -1,6 +1,7 @@
 //! `guava bench reconstruct`: the default reconstruction of a synthetic photo of the default body
 //! on one CPU thread, per stage (the UV map is built once per body and timed apart), then
-//! animating the avatar for one frame of the demo motion (posing + rigging its Gaussians).
+//! animating the avatar for one frame of the demo motion (posing + rigging its Gaussians), and
+//! the single-image fit of the demo portrait.
 
 use std::time::{Duration, Instant};
 
@@ -8,7 +9,10 @@ use super::body::cpu_name;
 use super::median;
 use crate::avatar::Rig;
 use crate::body::{BodyModel, BodyPose, PosedBody};
+use crate::fit::fit_keypoints;
 use crate::gaussians::GaussianCloud;
+use crate::keypoints::{PoseLandmarker, downsample_to_input};
+use crate::onnx::OnnxRuntime;
 use crate::reconstruct::synthetic::{banded_texture, photo, upper_body_camera};
 use crate::reconstruct::{
     DEFAULT_UV_SIZE, SourceImage, SourceView, Stage, UvMap, reconstruct_default,
@@ -92,6 +96,37 @@ pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
         avatar.len(),
         median(pose_ms),
         median(rig_ms)
+    );
+    fit_demo_portrait(&body, args.iterations)
+}
+
+/// Keypoints (ONNX Runtime, its default CPU threads) and the fit (one thread) on the demo portrait.
+fn fit_demo_portrait(body: &BodyModel, iterations: usize) -> anyhow::Result<()> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png");
+    let source = SourceImage::load(&path)?;
+    let mut model = PoseLandmarker::load(OnnxRuntime::load()?)?;
+    let (mut keypoint_ms, mut fit_ms) = (Vec::new(), Vec::new());
+    let mut last = None;
+    for i in 0..iterations.min(10) + 1 {
+        let t0 = Instant::now();
+        let input = downsample_to_input(&source.rgb, source.size as usize);
+        let found = model.run(&input, source.size as f32)?;
+        let t1 = Instant::now();
+        let (_, report) = fit_keypoints(body, &found.keypoints, source.size)?;
+        if i > 0 {
+            keypoint_ms.push(ms(t1 - t0));
+            fit_ms.push(ms(t1.elapsed()));
+        }
+        last = Some(report);
+    }
+    let report = last.expect("ran");
+    println!(
+        "fit of the demo portrait: keypoints {:.1} ms, fit {:.1} ms ({} keypoints, {:.1} px RMS, {} iterations)",
+        median(keypoint_ms),
+        median(fit_ms),
+        report.keypoints_used,
+        report.rms_px,
+        report.iterations
     );
     Ok(())
 }

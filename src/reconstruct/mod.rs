@@ -23,6 +23,8 @@ use std::time::{Duration, Instant};
 use crate::avatar::Avatar;
 use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, TargetGroup};
 use crate::camera::Camera;
+use crate::fit::FitReport;
+use crate::keypoints::PoseLandmarker;
 use crate::tracking::{Retarget, Tracking, TrackingError, camera_at};
 pub use default_mode::{DEFAULT_CHANNELS, DiscStyle};
 pub use source::{SOURCE_SIZE, SourceImage};
@@ -47,6 +49,8 @@ pub enum ReconstructError {
     TrackingFile(#[from] TrackingError),
     #[error(transparent)]
     Pose(#[from] PoseError),
+    #[error("pose model: {0}")]
+    Keypoints(String),
     #[error("cancelled")]
     Cancelled,
 }
@@ -54,6 +58,8 @@ pub enum ReconstructError {
 /// The stages, in order, for progress reports and timings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stage {
+    /// Keypoints and mask from the pose model, and the fit (photos without tracking or alpha).
+    Fit,
     Pose,
     Rasterize,
     TextureMap,
@@ -62,6 +68,7 @@ pub enum Stage {
 }
 
 impl Stage {
+    /// The stages of [`reconstruct_default`] (fitting comes before them, when it runs).
     pub const ALL: [Stage; 5] = [
         Stage::Pose,
         Stage::Rasterize,
@@ -72,6 +79,7 @@ impl Stage {
 
     pub fn name(self) -> &'static str {
         match self {
+            Stage::Fit => "keypoints, mask and fit",
             Stage::Pose => "pose source body",
             Stage::Rasterize => "rasterize (visibility, mask)",
             Stage::TextureMap => "inverse texture mapping",
@@ -88,8 +96,9 @@ pub struct Report {
     pub texels: usize,
     pub observed: usize,
     pub mirrored: usize,
-    /// Whether the person mask came from the photo's alpha (else the body's silhouette).
-    pub mask_from_alpha: bool,
+    pub mask: MaskSource,
+    /// How the pose and camera were fitted, when they were.
+    pub fit: Option<FitReport>,
 }
 
 /// The tracked source: pose and camera of the photo.
@@ -150,7 +159,11 @@ pub fn reconstruct_default(
 ) -> Result<(Avatar, Report), ReconstructError> {
     let mut report = Report {
         texels: uv.len(),
-        mask_from_alpha: photo.mask.is_some(),
+        mask: if photo.mask.is_some() {
+            MaskSource::Alpha
+        } else {
+            MaskSource::Silhouette
+        },
         ..Default::default()
     };
     let mut clock = StageClock::default();
@@ -204,24 +217,104 @@ pub fn tracking_beside(photo: &std::path::Path) -> std::path::PathBuf {
     photo.with_extension("json")
 }
 
-/// Reads `photo` and its tracking file and runs [`reconstruct_default`] on `body`; what the CLI
-/// and the viewer's worker call. Every error names the file.
+/// How the photo's pose and camera are known.
+pub enum Tracked<'a> {
+    /// A tracking file (frame 0).
+    File(&'a std::path::Path),
+    /// Fitted here to the pose model's keypoints.
+    Fit,
+}
+
+/// Where the person mask came from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MaskSource {
+    /// The photo's alpha channel.
+    #[default]
+    Alpha,
+    /// The pose model's person segmentation.
+    Segmentation,
+    /// The tracked body's silhouette (no alpha and no pose model).
+    Silhouette,
+}
+
+/// Reads `photo`, gets its pose and camera (from a tracking file or by fitting keypoints), and
+/// runs [`reconstruct_default`] on `body`: what the CLI and the viewer's worker call. A photo
+/// without alpha is masked by the pose model's segmentation when `landmarker` is given (else by
+/// the body's silhouette). Fitting needs `landmarker`. Every error names the file.
 pub fn reconstruct_photo_file(
     body: &BodyModel,
     uv: &UvMap,
     photo: &std::path::Path,
-    tracking: &std::path::Path,
+    tracked: Tracked,
+    landmarker: Option<&mut PoseLandmarker>,
     progress: &mut dyn FnMut(Stage) -> bool,
-) -> Result<(Avatar, Report), ReconstructError> {
-    let file = tracking.display().to_string();
-    let tracked = Tracking::load(tracking)?;
-    let view = SourceView::from_tracking(&tracked, body, &file)?;
-    let image = SourceImage::load(photo)?;
-    let name = photo.file_name().map_or_else(
-        || photo.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    );
-    reconstruct_default(body, uv, &view, image, &name, progress)
+) -> Result<(Avatar, Report, SourceView), ReconstructError> {
+    let mut image = SourceImage::load(photo)?;
+    let file = photo.display().to_string();
+    let needs_model = image.mask.is_none() || matches!(tracked, Tracked::Fit);
+    let started = Instant::now();
+    let mut keypoints = None;
+    if needs_model && let Some(landmarker) = landmarker {
+        if !progress(Stage::Fit) {
+            return Err(ReconstructError::Cancelled);
+        }
+        let input = crate::keypoints::downsample_to_input(&image.rgb, image.size as usize);
+        let found = landmarker
+            .run(&input, image.size as f32)
+            .map_err(|e| ReconstructError::Keypoints(e.to_string()))?;
+        keypoints = Some(found);
+    }
+    let mut mask = MaskSource::Alpha;
+    if image.mask.is_none() {
+        if let Some(k) = &keypoints {
+            image.apply_mask(k.mask_at(image.size as usize));
+            mask = MaskSource::Segmentation;
+        } else {
+            mask = MaskSource::Silhouette;
+        }
+    }
+    let (view, fit) = match tracked {
+        Tracked::File(path) => {
+            let name = path.display().to_string();
+            (
+                SourceView::from_tracking(&Tracking::load(path)?, body, &name)?,
+                None,
+            )
+        }
+        Tracked::Fit => {
+            let k = keypoints.as_ref().ok_or_else(|| {
+                ReconstructError::Keypoints(
+                    "fitting a photo needs the pose model, which did not load".into(),
+                )
+            })?;
+            if k.presence < 0.5 {
+                return Err(ReconstructError::Image {
+                    file,
+                    problem: format!(
+                        "the pose model finds no person (presence {:.2}); give the photo's tracking file",
+                        k.presence
+                    ),
+                });
+            }
+            let (view, report) = crate::fit::fit_keypoints(body, &k.keypoints, image.size)
+                .map_err(|e| ReconstructError::Image {
+                    file: file.clone(),
+                    problem: e.to_string(),
+                })?;
+            (view, Some(report))
+        }
+    };
+    let fit_time = started.elapsed();
+    let name = photo
+        .file_name()
+        .map_or_else(|| file.clone(), |n| n.to_string_lossy().into_owned());
+    let (avatar, mut report) = reconstruct_default(body, uv, &view, image, &name, progress)?;
+    report.mask = mask;
+    if keypoints.is_some() {
+        report.timings.insert(0, (Stage::Fit, fit_time));
+    }
+    report.fit = fit;
+    Ok((avatar, report, view))
 }
 
 /// Times consecutive stages and asks the progress callback whether to go on.

@@ -326,7 +326,7 @@ impl GuavaApp {
             Body,
             Motion,
             Avatar,
-            Photo(PathBuf, Arc<BodyModel>),
+            Photo(Option<PathBuf>, Arc<BodyModel>),
         }
         let kind = match ext.as_deref() {
             Some("ply") => Kind::Cloud,
@@ -334,20 +334,12 @@ impl GuavaApp {
             Some("json" | "csv" | "npz") => Kind::Motion,
             Some("guava") => Kind::Avatar,
             Some("png" | "jpg" | "jpeg") => {
+                // Its tracking file beside it, if there is one; otherwise the pose is fitted.
                 let tracking = guava::reconstruct::tracking_beside(&path);
-                if !tracking.is_file() {
-                    self.error(format!(
-                        "{}: reconstruction needs the photo's tracking, {} beside it; fitting a photo \
-                         without tracking is not implemented yet (see README, \"Missing\")",
-                        path.display(),
-                        tracking.display()
-                    ));
-                    return;
-                }
                 let Some(body) = &self.body else {
                     return self.error("no body to reconstruct on".into());
                 };
-                Kind::Photo(tracking, body.model.clone())
+                Kind::Photo(tracking.is_file().then_some(tracking), body.model.clone())
             }
             _ => {
                 self.error(format!(
@@ -372,7 +364,7 @@ impl GuavaApp {
                 Kind::Photo(tracking, body) => reconstruct_worker(
                     &body,
                     &worker_path,
-                    &tracking,
+                    tracking.as_deref(),
                     &worker_stage,
                     &worker_cancel,
                 ),
@@ -465,6 +457,12 @@ impl GuavaApp {
         let mut label = format!("{} — {}", avatar.kind.label(), avatar.source);
         if let Some(r) = &report {
             let ms: f64 = r.timings.iter().map(|(_, d)| d.as_secs_f64() * 1e3).sum();
+            if let Some(f) = &r.fit {
+                label.push_str(&format!(
+                    "; pose and camera fitted to {} keypoints ({:.1} px RMS)",
+                    f.keypoints_used, f.rms_px
+                ));
+            }
             label.push_str(&format!(
                 "; {} of {} texels seen, {} mirrored, rest inpainted; {ms:.0} ms",
                 r.observed, r.texels, r.mirrored
@@ -586,6 +584,10 @@ impl GuavaApp {
                 }
                 if ui.button("Open test scene").clicked() {
                     self.open_test_scene();
+                    ui.close();
+                }
+                if ui.button("Reconstruct demo portrait").clicked() {
+                    self.open(demo_portrait());
                     ui.close();
                 }
                 if ui.button("Reconstruct synthetic photo").clicked() {
@@ -863,10 +865,13 @@ impl GuavaApp {
         child.label("Drop a 3DGS .ply file here, or use File > Open…");
         child.label("(Body templates, .glb, open in the Body mesh view.)");
         child
-            .label("(A photo .png/.jpg with its tracking .json beside it reconstructs an avatar.)");
+            .label("(A photo .png/.jpg reconstructs an avatar: with its tracking .json beside it, or fitted.)");
         child.add_space(8.0);
         if child.button("Open test scene").clicked() {
             self.open_test_scene();
+        }
+        if child.button("Reconstruct demo portrait").clicked() {
+            self.open(demo_portrait());
         }
         if child.button("Reconstruct synthetic photo").clicked() {
             self.reconstruct_synthetic_photo();
@@ -915,6 +920,12 @@ impl GuavaApp {
     }
 }
 
+/// The shipped demo portrait (scikit-image's astronaut, public domain), with its fitted tracking
+/// beside it (`assets/demo_portrait.json`, written by `guava fit`).
+pub fn demo_portrait() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/demo_portrait.png")
+}
+
 /// The name the synthetic demo photo goes by in the UI and in the avatar it makes.
 const SYNTHETIC_PHOTO: &str = "synthetic photo of the default body (known-answer demo)";
 
@@ -932,20 +943,41 @@ fn progress<'a>(
 fn reconstruct_worker(
     body: &BodyModel,
     photo: &Path,
-    tracking: &Path,
+    tracking: Option<&Path>,
     stage: &Mutex<&'static str>,
     cancel: &AtomicBool,
 ) -> Result<Loaded, String> {
+    use guava::reconstruct::{DEFAULT_UV_SIZE, Tracked, UvMap, reconstruct_photo_file};
+    *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the pose model";
+    // The pose model fits photos without tracking and masks photos without alpha.
+    let model = guava::onnx::OnnxRuntime::load()
+        .map_err(|e| e.to_string())
+        .and_then(|rt| guava::keypoints::PoseLandmarker::load(rt).map_err(|e| e.to_string()));
+    let mut model = match (tracking, model) {
+        (_, Ok(m)) => Some(m),
+        (None, Err(e)) => {
+            return Err(format!(
+                "{}: no tracking file beside it, and fitting needs the pose model: {e}",
+                photo.display()
+            ));
+        }
+        (Some(_), Err(e)) => {
+            log::warn!("pose model unavailable ({e}); masking by the body's silhouette");
+            None
+        }
+    };
     *stage.lock().unwrap_or_else(|e| e.into_inner()) = "building the UV map";
-    let uv = guava::reconstruct::UvMap::for_body(body, guava::reconstruct::DEFAULT_UV_SIZE);
-    guava::reconstruct::reconstruct_photo_file(
+    let uv = UvMap::for_body(body, DEFAULT_UV_SIZE);
+    let tracked = tracking.map_or(Tracked::Fit, Tracked::File);
+    reconstruct_photo_file(
         body,
         &uv,
         photo,
-        tracking,
+        tracked,
+        model.as_mut(),
         &mut progress(stage, cancel),
     )
-    .map(|(a, r)| Loaded::Avatar(a, Some(r)))
+    .map(|(a, r, _)| Loaded::Avatar(a, Some(r)))
     .map_err(|e| e.to_string())
 }
 

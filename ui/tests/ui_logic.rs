@@ -100,9 +100,11 @@ fn bad_files_are_reported_and_the_scene_is_kept() {
         "the previous scene stays"
     );
 
+    // A photo that is not there: reported by name, the scene stays.
     h.state_mut().open(dir.join("photo.png"));
-    let status = h.state().status().unwrap_or_default().to_string();
-    assert!(status.contains("not implemented yet"), "{status}");
+    let status = wait_for_status(&mut h, "photo.png");
+    assert!(status.contains("photo.png: "), "{status}");
+    assert_eq!(h.state().scene_len(), Some(40_000));
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -1,0 +1,181 @@
+//! 2D body keypoints and a person mask from MediaPipe's pose landmark model (`pose_landmark_full`,
+//! Apache-2.0, converted to ONNX by `tools/convert_mediapipe.py`) through ONNX Runtime.
+//!
+//! The model sees the photo's centred square crop at 256² (RGB in [0, 1], NHWC, as MediaPipe
+//! feeds it) and returns 39 landmarks (33 body points and 6 auxiliary) in input pixels with
+//! visibility and presence logits, a pose presence score and 256² segmentation logits. No pose
+//! detector runs first: the crop is the whole centred square, which suits an upper-body portrait
+//! that fills the frame (MediaPipe's own pipeline crops around a detected person).
+
+use std::path::Path;
+
+use glam::Vec2;
+
+use crate::onnx::{OnnxError, OnnxRuntime, Session, TensorF32};
+
+/// The converted model shipped in the repository.
+pub const POSE_MODEL_PATH: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/assets/models/pose_landmark_full.onnx"
+);
+/// The model's input side.
+pub const POSE_INPUT: usize = 256;
+const LANDMARKS: usize = 39;
+
+/// The COCO body keypoints by the default body's landmark names, with their MediaPipe index.
+pub const COCO_FROM_MEDIAPIPE: [(&str, usize); 17] = [
+    ("nose", 0),
+    ("left_eye", 2),
+    ("right_eye", 5),
+    ("left_ear", 7),
+    ("right_ear", 8),
+    ("left_shoulder", 11),
+    ("right_shoulder", 12),
+    ("left_elbow", 13),
+    ("right_elbow", 14),
+    ("left_wrist", 15),
+    ("right_wrist", 16),
+    ("left_hip", 23),
+    ("right_hip", 24),
+    ("left_knee", 25),
+    ("right_knee", 26),
+    ("left_ankle", 27),
+    ("right_ankle", 28),
+];
+
+/// One keypoint: a named landmark's image position and how sure the model is that it is visible.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Keypoint {
+    pub name: &'static str,
+    /// Pixel-edge coordinates in an image of side `side` (the size `detect` was asked for).
+    pub pixel: Vec2,
+    /// sigmoid(visibility) · sigmoid(presence), in [0, 1].
+    pub confidence: f32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseKeypoints {
+    /// The model's pose presence score in [0, 1].
+    pub presence: f32,
+    /// The raw landmark rows (x, y, z in input pixels, visibility and presence logits).
+    pub landmarks: Vec<[f32; 5]>,
+    pub keypoints: Vec<Keypoint>,
+    /// Person probability per pixel of the 256² input, row-major.
+    pub mask: Vec<f32>,
+}
+
+impl PoseKeypoints {
+    /// The mask resized (bilinear) to `side`² for a source image of that size.
+    pub fn mask_at(&self, side: usize) -> Vec<f32> {
+        let scale = POSE_INPUT as f32 / side as f32;
+        let max = (POSE_INPUT - 1) as f32;
+        let at = |r: usize, c: usize| self.mask[r * POSE_INPUT + c];
+        (0..side * side)
+            .map(|i| {
+                let x = (((i % side) as f32 + 0.5) * scale - 0.5).clamp(0.0, max);
+                let y = (((i / side) as f32 + 0.5) * scale - 0.5).clamp(0.0, max);
+                let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+                let (x1, y1) = ((x0 + 1).min(POSE_INPUT - 1), (y0 + 1).min(POSE_INPUT - 1));
+                let (fx, fy) = (x - x0 as f32, y - y0 as f32);
+                let top = at(y0, x0) * (1.0 - fx) + at(y0, x1) * fx;
+                let bottom = at(y1, x0) * (1.0 - fx) + at(y1, x1) * fx;
+                top * (1.0 - fy) + bottom * fy
+            })
+            .collect()
+    }
+}
+
+fn sigmoid(x: f32) -> f32 {
+    1.0 / (1.0 + (-x).exp())
+}
+
+pub struct PoseLandmarker {
+    session: Session,
+}
+
+impl PoseLandmarker {
+    /// The shipped model on `runtime`.
+    pub fn load(runtime: &OnnxRuntime) -> Result<Self, OnnxError> {
+        Self::load_from(runtime, Path::new(POSE_MODEL_PATH))
+    }
+
+    pub fn load_from(runtime: &OnnxRuntime, path: &Path) -> Result<Self, OnnxError> {
+        let session = runtime.session(path)?;
+        if session.input_names().len() != 1 || session.output_names().len() != 5 {
+            return Err(OnnxError::Model {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "expected MediaPipe's pose landmark model (1 input, 5 outputs), found inputs {:?} and outputs {:?}",
+                    session.input_names(),
+                    session.output_names()
+                ),
+            });
+        }
+        Ok(Self { session })
+    }
+
+    /// Runs the model on a 256² RGB input in [0, 1] (row-major, interleaved); keypoints are
+    /// scaled to an image of side `side` that shows the same square.
+    pub fn run(&mut self, input: &[f32], side: f32) -> Result<PoseKeypoints, OnnxError> {
+        assert_eq!(input.len(), POSE_INPUT * POSE_INPUT * 3, "256² RGB input");
+        let name = self.session.input_names()[0].clone();
+        let tensor = TensorF32 {
+            shape: vec![1, POSE_INPUT, POSE_INPUT, 3],
+            data: input.to_vec(),
+        };
+        let outputs = self.session.run(vec![(&name, tensor)])?;
+        let find = |len: usize| outputs.iter().find(|o| o.data.len() == len);
+        let bad = |what: &str| OnnxError::Run {
+            path: self.session.path.clone(),
+            reason: format!("the model gave no {what} output"),
+        };
+        let raw = find(LANDMARKS * 5).ok_or_else(|| bad("landmark"))?;
+        let presence = find(1).ok_or_else(|| bad("presence"))?.data[0];
+        let mask = find(POSE_INPUT * POSE_INPUT).ok_or_else(|| bad("segmentation"))?;
+        let landmarks: Vec<[f32; 5]> = raw
+            .data
+            .chunks_exact(5)
+            .map(|c| [c[0], c[1], c[2], c[3], c[4]])
+            .collect();
+        let scale = side / POSE_INPUT as f32;
+        let keypoints = COCO_FROM_MEDIAPIPE
+            .iter()
+            .map(|&(name, i)| {
+                let l = landmarks[i];
+                Keypoint {
+                    name,
+                    pixel: Vec2::new(l[0], l[1]) * scale,
+                    confidence: sigmoid(l[3]) * sigmoid(l[4]),
+                }
+            })
+            .collect();
+        Ok(PoseKeypoints {
+            presence,
+            landmarks,
+            keypoints,
+            mask: mask.data.iter().map(|&x| sigmoid(x)).collect(),
+        })
+    }
+}
+
+/// A `side`² RGB image in [0, 1] (interleaved) box-filtered down to the model's 256² input;
+/// `side` must be a multiple of 256.
+pub fn downsample_to_input(rgb: &[f32], side: usize) -> Vec<f32> {
+    let k = side / POSE_INPUT;
+    assert!(
+        k >= 1 && k * POSE_INPUT == side,
+        "side {side} is not a multiple of 256"
+    );
+    let mut out = vec![0.0; POSE_INPUT * POSE_INPUT * 3];
+    let norm = 1.0 / (k * k) as f32;
+    for y in 0..side {
+        for x in 0..side {
+            let o = ((y / k) * POSE_INPUT + x / k) * 3;
+            let i = (y * side + x) * 3;
+            for c in 0..3 {
+                out[o + c] += rgb[i + c] * norm;
+            }
+        }
+    }
+    out
+}

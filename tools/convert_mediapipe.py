@@ -1,0 +1,104 @@
+#!/usr/bin/env python3
+"""Converts MediaPipe's pose landmark model to ONNX and ships the demo portrait, once, offline.
+
+Needs (not in CI; a throw-away venv of ~1.7 GB):
+    pip install mediapipe==0.10.21 tensorflow-cpu tf2onnx onnxruntime==1.32.0 pillow
+    pip download --no-deps scikit-image==0.25.2 -d target/skimage
+    python tools/convert_mediapipe.py --skimage-wheel target/skimage/scikit_image-0.25.2-*.whl
+
+Writes:
+- assets/models/pose_landmark_full.onnx: MediaPipe `pose_landmark_full.tflite` (Apache-2.0, from
+  the mediapipe 0.10.21 wheel) through tf2onnx, opset 17. Input [1,256,256,3] RGB in [0, 1];
+  outputs 39×5 landmarks (x, y, z in input pixels, visibility and presence logits), the pose
+  presence score, and 256² person-segmentation logits.
+- assets/demo_portrait.png: scikit-image's `astronaut.png` (Eileen Collins, NASA; public domain).
+- tests/data/pose_landmark_fixture.json and tests/data/demo_portrait_256.png: the model's input
+  for the demo portrait (the centred square crop resized to 256² by Pillow, 8-bit) and what the
+  TFLite interpreter outputs for it, so the Rust test checks our ONNX path against MediaPipe's own.
+The converted model is checked against the TFLite interpreter on the real photo (not only random
+input) before anything is written.
+"""
+import argparse
+import hashlib
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import zipfile
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SKIMAGE_ASTRONAUT_SHA256 = "88431cd9653ccd539741b555fb0a46b61558b301d4110412b5bc28b5e3ea6cb5"
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--skimage-wheel", required=True)
+    args = ap.parse_args()
+
+    import mediapipe
+    import onnxruntime as ort
+    import tensorflow as tf
+    from PIL import Image
+
+    if mediapipe.__version__ != "0.10.21":
+        sys.exit(f"need mediapipe 0.10.21 (its wheel ships the models), found {mediapipe.__version__}")
+    tflite = os.path.join(os.path.dirname(mediapipe.__file__), "modules/pose_landmark/pose_landmark_full.tflite")
+
+    with zipfile.ZipFile(args.skimage_wheel) as whl:
+        portrait = whl.read("skimage/data/astronaut.png")
+    digest = hashlib.sha256(portrait).hexdigest()
+    if digest != SKIMAGE_ASTRONAUT_SHA256:
+        sys.exit(f"astronaut.png has sha256 {digest}, expected {SKIMAGE_ASTRONAUT_SHA256}")
+
+    models = os.path.join(ROOT, "assets/models")
+    os.makedirs(models, exist_ok=True)
+    onnx_path = os.path.join(models, "pose_landmark_full.onnx")
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "pose.onnx")
+        subprocess.run([sys.executable, "-m", "tf2onnx.convert", "--tflite", tflite, "--output", out,
+                        "--opset", "17"], check=True, capture_output=True)
+        onnx_bytes = open(out, "rb").read()
+
+    # The model's input for the portrait: centred square (it is square), 256², [0, 1].
+    image = Image.open(__import__("io").BytesIO(portrait)).convert("RGB")
+    side = min(image.size)
+    left, top = (image.width - side) // 2, (image.height - side) // 2
+    small = image.crop((left, top, left + side, top + side)).resize((256, 256), Image.BILINEAR)
+    x = np.asarray(small, np.float32)[None] / 255.0
+
+    interpreter = tf.lite.Interpreter(tflite)
+    interpreter.allocate_tensors()
+    interpreter.set_tensor(interpreter.get_input_details()[0]["index"], x)
+    interpreter.invoke()
+    outputs = {d["name"]: interpreter.get_tensor(d["index"]) for d in interpreter.get_output_details()}
+    landmarks = next(v for v in outputs.values() if v.shape == (1, 195)).reshape(39, 5)
+    presence = next(v for v in outputs.values() if v.shape == (1, 1))
+
+    session = ort.InferenceSession(onnx_bytes)
+    got = dict(zip([o.name for o in session.get_outputs()], session.run(None, {session.get_inputs()[0].name: x})))
+    lm_onnx = got["Identity"].reshape(39, 5)
+    worst = np.abs(lm_onnx[:, :2] - landmarks[:, :2]).max()
+    if worst > 0.01:
+        sys.exit(f"ONNX and TFLite landmarks differ by {worst} px")
+    if abs(got["Identity_1"].item() - presence.item()) > 1e-3 or presence.item() < 0.5:
+        sys.exit(f"presence {got['Identity_1'].item()} vs TFLite {presence.item()}")
+    print(f"ONNX vs TFLite on the portrait: landmarks within {worst:.2e} px, presence {presence.item():.3f}")
+
+    open(onnx_path, "wb").write(onnx_bytes)
+    open(os.path.join(ROOT, "assets/demo_portrait.png"), "wb").write(portrait)
+    small.save(os.path.join(ROOT, "tests/data/demo_portrait_256.png"))
+    fixture = {
+        "source": "TFLite interpreter (tensorflow " + tf.__version__ + ") on tests/data/demo_portrait_256.png / 255",
+        "model": "mediapipe 0.10.21 modules/pose_landmark/pose_landmark_full.tflite",
+        "landmarks": [[round(float(v), 4) for v in row] for row in landmarks],
+        "presence": round(float(presence.item()), 5),
+    }
+    json.dump(fixture, open(os.path.join(ROOT, "tests/data/pose_landmark_fixture.json"), "w"), indent=1)
+    print(f"wrote {onnx_path} ({len(onnx_bytes) / 1e6:.1f} MB), assets/demo_portrait.png, the fixture")
+
+
+if __name__ == "__main__":
+    main()
