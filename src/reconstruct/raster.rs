@@ -7,7 +7,7 @@
 //! barycentrics and depth are perspective-correct.
 
 use crate::camera::Camera;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// Triangles with a corner nearer than this (metres, view z) are left out rather than clipped:
 /// a camera inside the avatar then sees past the triangles at its eye instead of dividing by ~0.
@@ -55,47 +55,49 @@ pub fn rasterize(vertices: &[Vec3], triangles: &[[u32; 3]], camera: &Camera) -> 
         if p.iter().any(|q| !q.is_finite() || q.z <= RASTER_NEAR) {
             continue;
         }
-        let area = edge(p[0], p[1], p[2].x, p[2].y);
-        if area == 0.0 || !area.is_finite() {
-            continue;
-        }
-        let lo = p[0].min(p[1]).min(p[2]);
-        let hi = p[0].max(p[1]).max(p[2]);
-        // Pixels whose centre x + 0.5 lies in [lo.x, hi.x].
-        let x0 = (lo.x - 0.5).ceil().max(0.0) as u32;
-        let y0 = (lo.y - 0.5).ceil().max(0.0) as u32;
-        let x1 = ((hi.x - 0.5).floor()).min(w as f32 - 1.0);
-        let y1 = ((hi.y - 0.5).floor()).min(h as f32 - 1.0);
-        if x1 < 0.0 || y1 < 0.0 {
-            continue;
-        }
         let inv_z = p.map(|q| 1.0 / q.z);
-        for y in y0..=y1 as u32 {
-            let py = y as f32 + 0.5;
-            for x in x0..=x1 as u32 {
-                let px = x as f32 + 0.5;
-                // Screen-space barycentrics; the same sign as the area means inside (either winding).
-                let l0 = edge(p[1], p[2], px, py) / area;
-                let l1 = edge(p[2], p[0], px, py) / area;
-                let l2 = 1.0 - l0 - l1;
-                if l0 < 0.0 || l1 < 0.0 || l2 < 0.0 {
-                    continue;
-                }
-                let wsum = l0 * inv_z[0] + l1 * inv_z[1] + l2 * inv_z[2];
-                let z = 1.0 / wsum;
-                let i = (y * w + x) as usize;
-                if z < out.depth[i] {
-                    out.depth[i] = z;
-                    out.triangle[i] = t as i32;
-                    out.bary[i] = [l0 * inv_z[0] * z, l1 * inv_z[1] * z, l2 * inv_z[2] * z];
-                }
+        let corners = p.map(|q| Vec2::new(q.x, q.y));
+        cover(corners, w, h, |x, y, l| {
+            let z = 1.0 / (l[0] * inv_z[0] + l[1] * inv_z[1] + l[2] * inv_z[2]);
+            let i = (y * w + x) as usize;
+            if z < out.depth[i] {
+                out.depth[i] = z;
+                out.triangle[i] = t as i32;
+                out.bary[i] = [0, 1, 2].map(|k| l[k] * inv_z[k] * z);
             }
-        }
+        });
     }
     out
 }
 
-/// Twice the signed area of (a, b, (x, y)).
-fn edge(a: Vec3, b: Vec3, x: f32, y: f32) -> f32 {
-    (b.x - a.x) * (y - a.y) - (b.y - a.y) * (x - a.x)
+/// Calls `f(x, y, barycentrics)` for every pixel of a `width × height` grid whose centre
+/// (x + ½, y + ½) lies in the 2D triangle `p` (either winding, edges included), with the centre's
+/// barycentrics. Degenerate and non-finite triangles cover nothing.
+pub(super) fn cover(p: [Vec2; 3], width: u32, height: u32, mut f: impl FnMut(u32, u32, [f32; 3])) {
+    let area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
+    if area == 0.0 || !area.is_finite() {
+        return;
+    }
+    let lo = p[0].min(p[1]).min(p[2]);
+    let hi = p[0].max(p[1]).max(p[2]);
+    // Pixels whose centre lies in [lo, hi].
+    let x0 = (lo.x - 0.5).ceil().max(0.0) as u32;
+    let y0 = (lo.y - 0.5).ceil().max(0.0) as u32;
+    let x1 = (hi.x - 0.5).floor().min(width as f32 - 1.0);
+    let y1 = (hi.y - 0.5).floor().min(height as f32 - 1.0);
+    if x1 < 0.0 || y1 < 0.0 {
+        return;
+    }
+    for y in y0..=y1 as u32 {
+        for x in x0..=x1 as u32 {
+            let q = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            // The same sign as the area means inside.
+            let l0 = (p[2] - p[1]).perp_dot(q - p[1]) / area;
+            let l1 = (p[0] - p[2]).perp_dot(q - p[2]) / area;
+            let l2 = 1.0 - l0 - l1;
+            if l0 >= 0.0 && l1 >= 0.0 && l2 >= 0.0 {
+                f(x, y, [l0, l1, l2]);
+            }
+        }
+    }
 }

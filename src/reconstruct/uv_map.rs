@@ -9,6 +9,7 @@ use std::collections::HashMap;
 
 use glam::{Vec2, Vec3};
 
+use super::raster::cover;
 use crate::body::BodyModel;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -31,30 +32,12 @@ impl UvMap {
         let mut triangle = vec![-1; s * s];
         let mut bary = vec![[0.0; 3]; s * s];
         for (t, tri) in triangles.iter().enumerate() {
-            let p = tri.map(|i| uvs[i as usize] * size as f32);
-            let area = cross(p[1] - p[0], p[2] - p[0]);
-            if area == 0.0 || !area.is_finite() {
-                continue;
-            }
-            let lo = p[0].min(p[1]).min(p[2]);
-            let hi = p[0].max(p[1]).max(p[2]);
-            let c0 = (lo.x - 0.5).ceil().max(0.0) as usize;
-            let r0 = (lo.y - 0.5).ceil().max(0.0) as usize;
-            let c1 = ((hi.x - 0.5).floor() as i64).min(s as i64 - 1);
-            let r1 = ((hi.y - 0.5).floor() as i64).min(s as i64 - 1);
-            for r in r0 as i64..=r1 {
-                for c in c0 as i64..=c1 {
-                    let q = Vec2::new(c as f32 + 0.5, r as f32 + 0.5);
-                    let l0 = cross(p[2] - p[1], q - p[1]) / area;
-                    let l1 = cross(p[0] - p[2], q - p[2]) / area;
-                    let l2 = 1.0 - l0 - l1;
-                    if l0 >= 0.0 && l1 >= 0.0 && l2 >= 0.0 {
-                        let i = r as usize * s + c as usize;
-                        triangle[i] = t as i32;
-                        bary[i] = [l0, l1, l2];
-                    }
-                }
-            }
+            let corners = tri.map(|i| uvs[i as usize] * size as f32);
+            cover(corners, size, size, |c, r, l| {
+                let i = r as usize * s + c as usize;
+                triangle[i] = t as i32;
+                bary[i] = l;
+            });
         }
         let texels = (0..(s * s) as u32)
             .filter(|&i| triangle[i as usize] >= 0)
@@ -110,10 +93,6 @@ impl UvMap {
             + b[1] * vertices[tri[1] as usize]
             + b[2] * vertices[tri[2] as usize]
     }
-}
-
-fn cross(a: Vec2, b: Vec2) -> f32 {
-    a.x * b.y - a.y * b.x
 }
 
 /// Positions closer than this (metres) are the same point for the mirror match.
