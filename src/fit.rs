@@ -2,11 +2,12 @@
 //! a photo's 2D keypoints (Levenberg–Marquardt with a pose prior, in Rust).
 //!
 //! Unknowns: the global orientation (root axis-angle), the camera translation (GUAVA's camera:
-//! `invtanfov` 24, looking at the body's front, so its distance sets the scale) and the
-//! rotations of [`FITTED_JOINTS`]. Residuals: each keypoint's reprojection error in pixels,
-//! weighted by √confidence; the prior pulls joint rotations to rest at [`PRIOR_PX_PER_RAD`]
-//! pixels per radian, so joints no keypoint constrains (legs out of frame, twist about a bone)
-//! stay near rest. Shape and expression are not fitted (no face keypoints yet).
+//! `invtanfov` 24, looking at the body's front, so its distance sets the scale), the rotations
+//! of [`FITTED_JOINTS`] and the shape coefficients (kept within their ranges). Residuals: each
+//! keypoint's reprojection error in pixels, weighted by √confidence; the priors pull joint
+//! rotations to rest at [`PRIOR_PX_PER_RAD`] pixels per radian, so joints no keypoint
+//! constrains (legs out of frame, twist about a bone) stay near rest, and shape to the default
+//! at [`SHAPE_PRIOR_PX`] per unit. Expression is not fitted (no face keypoints yet).
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
@@ -31,6 +32,8 @@ pub const FITTED_JOINTS: [&str; 11] = [
 ];
 /// Prior strength: a joint turned by 1 rad costs as much as a keypoint 25 px off.
 pub const PRIOR_PX_PER_RAD: f64 = 25.0;
+/// Shape prior: a shape coefficient at 1 (a phenotype's end) costs as much as a keypoint 20 px off.
+pub const SHAPE_PRIOR_PX: f64 = 20.0;
 /// The global orientation's prior is weaker: people face the camera at any angle.
 const ROOT_PRIOR_PX_PER_RAD: f64 = 2.0;
 /// Keypoints the model is less sure of are left out.
@@ -71,6 +74,8 @@ struct Problem<'a> {
     /// (landmark index, observed pixel, √confidence)
     observations: Vec<(usize, Vec2, f64)>,
     joints: Vec<usize>,
+    /// Shape targets and their ranges.
+    shapes: Vec<(usize, [f32; 2])>,
     posed: PosedBody,
 }
 
@@ -81,6 +86,10 @@ impl Problem<'_> {
         pose.rotations[0] = v(0);
         for (k, &j) in self.joints.iter().enumerate() {
             pose.rotations[j] = v(6 + 3 * k);
+        }
+        let first_shape = 6 + 3 * self.joints.len();
+        for (k, &(t, [lo, hi])) in self.shapes.iter().enumerate() {
+            pose.coefficients[t] = (p[first_shape + k] as f32).clamp(lo, hi);
         }
         SourceView {
             pose,
@@ -109,12 +118,14 @@ impl Problem<'_> {
                 out.push(if ok { w * (a - b) as f64 } else { 1e4 });
             }
         }
+        let first_shape = 6 + 3 * self.joints.len();
         out.extend(p[..3].iter().map(|x| ROOT_PRIOR_PX_PER_RAD * x));
-        out.extend(p[6..].iter().map(|x| PRIOR_PX_PER_RAD * x));
+        out.extend(p[6..first_shape].iter().map(|x| PRIOR_PX_PER_RAD * x));
+        out.extend(p[first_shape..].iter().map(|x| SHAPE_PRIOR_PX * x));
     }
 
     fn len(&self) -> usize {
-        2 * self.observations.len() + 3 + 3 * self.joints.len()
+        2 * self.observations.len() + 3 + 3 * self.joints.len() + self.shapes.len()
     }
 }
 
@@ -166,7 +177,11 @@ pub fn fit_keypoints(
         (m2.y - centre) * depth / focal + m3.y,
         depth + m3.z,
     );
-    let n = 6 + 3 * joints.len();
+    let shapes: Vec<(usize, [f32; 2])> = body
+        .targets_in(crate::body::TargetGroup::Shape)
+        .map(|(i, t)| (i, t.range))
+        .collect();
+    let n = 6 + 3 * joints.len() + shapes.len();
     let mut p = vec![0.0f64; n];
     p[3..6].copy_from_slice(&[t.x as f64, t.y as f64, t.z as f64]);
 
@@ -175,6 +190,7 @@ pub fn fit_keypoints(
         side,
         observations,
         joints,
+        shapes,
         posed: PosedBody::default(),
     };
     let (mut r, mut r_step) = (Vec::new(), Vec::new());

@@ -99,6 +99,8 @@ pub struct Report {
     pub mask: MaskSource,
     /// How the pose and camera were fitted, when they were.
     pub fit: Option<FitReport>,
+    /// The pose model's body keypoints on the source image, when it ran.
+    pub keypoints: Vec<crate::keypoints::Keypoint>,
 }
 
 /// The tracked source: pose and camera of the photo.
@@ -314,6 +316,7 @@ pub fn reconstruct_photo_file(
         report.timings.insert(0, (Stage::Fit, fit_time));
     }
     report.fit = fit;
+    report.keypoints = keypoints.map(|k| k.keypoints).unwrap_or_default();
     Ok((avatar, report, view))
 }
 

@@ -1,7 +1,7 @@
 //! The viewer window: menu, scene panel with camera and render controls and the HUD, status bar,
 //! drag-and-drop, and the viewport. Loading runs on a worker thread with progress and Cancel.
 
-use crate::avatar_view::AvatarState;
+use crate::avatar_view::{AvatarState, SourcePreview};
 use crate::body_panel::BodyState;
 use crate::motion::Motion;
 use crate::orbit::OrbitCamera;
@@ -58,8 +58,13 @@ enum Loaded {
     Cloud(GaussianCloud),
     Body(BodyModel),
     Motion(Imported),
-    /// An avatar file, or a reconstruction (then with what it saw).
-    Avatar(Avatar, Option<guava::reconstruct::Report>),
+    /// An avatar file, or a reconstruction (then with what it saw, and the photo with its
+    /// keypoints when the pose model ran).
+    Avatar(
+        Box<Avatar>,
+        Option<guava::reconstruct::Report>,
+        Option<SourcePreview>,
+    ),
 }
 
 struct Loading {
@@ -359,7 +364,7 @@ impl GuavaApp {
         std::thread::spawn(move || {
             let result = match kind {
                 Kind::Avatar => Avatar::load(&worker_path)
-                    .map(|a| Loaded::Avatar(a, None))
+                    .map(|a| Loaded::Avatar(Box::new(a), None, None))
                     .map_err(|e| e.to_string()),
                 Kind::Photo(tracking, body) => reconstruct_worker(
                     &body,
@@ -426,7 +431,7 @@ impl GuavaApp {
                     SYNTHETIC_PHOTO,
                     &mut progress(&worker_stage, &worker_cancel),
                 )
-                .map(|(a, r)| Loaded::Avatar(a, Some(r)))
+                .map(|(a, r)| Loaded::Avatar(Box::new(a), Some(r), None))
                 .map_err(|e| e.to_string())
             };
             let _ = tx.send(run());
@@ -446,6 +451,7 @@ impl GuavaApp {
         path: &Path,
         avatar: Avatar,
         report: Option<guava::reconstruct::Report>,
+        preview: Option<SourcePreview>,
     ) {
         let Some(body) = &mut self.body else {
             return self.error("no body to pose the avatar on".into());
@@ -479,7 +485,7 @@ impl GuavaApp {
             ),
             false,
         ));
-        self.avatar = Some(AvatarState::new(avatar, label));
+        self.avatar = Some(AvatarState::new(avatar, label, preview));
         self.view = View::Avatar;
         self.reset_camera();
     }
@@ -526,7 +532,9 @@ impl GuavaApp {
                         let label = format!("{} — {}", file_name(&path), imported.tracking.source);
                         self.set_motion(label, imported);
                     }
-                    Ok(Loaded::Avatar(avatar, report)) => self.accept_avatar(&path, avatar, report),
+                    Ok(Loaded::Avatar(avatar, report, preview)) => {
+                        self.accept_avatar(&path, *avatar, report, preview)
+                    }
                     Err(e) => self.error(e),
                 }
             }
@@ -650,7 +658,7 @@ impl GuavaApp {
             self.view_choice_ui(ui);
         });
         ui.separator();
-        if let (View::Avatar, Some(avatar)) = (self.view, &self.avatar) {
+        if let (View::Avatar, Some(avatar)) = (self.view, &mut self.avatar) {
             ui.heading("Avatar");
             ui.label(&avatar.label);
             let a = &avatar.avatar;
@@ -661,6 +669,11 @@ impl GuavaApp {
                 a.uv.local.len(),
                 a.channels
             ));
+            if let Some(source) = &mut avatar.source {
+                egui::CollapsingHeader::new("Source photo and fit")
+                    .default_open(true)
+                    .show(ui, |ui| source.ui(ui));
+            }
             ui.separator();
         }
         if matches!(self.view, View::Body | View::Avatar) {
@@ -969,7 +982,7 @@ fn reconstruct_worker(
     *stage.lock().unwrap_or_else(|e| e.into_inner()) = "building the UV map";
     let uv = UvMap::for_body(body, DEFAULT_UV_SIZE);
     let tracked = tracking.map_or(Tracked::Fit, Tracked::File);
-    reconstruct_photo_file(
+    let (avatar, report, view) = reconstruct_photo_file(
         body,
         &uv,
         photo,
@@ -977,8 +990,9 @@ fn reconstruct_worker(
         model.as_mut(),
         &mut progress(stage, cancel),
     )
-    .map(|(a, r, _)| Loaded::Avatar(a, Some(r)))
-    .map_err(|e| e.to_string())
+    .map_err(|e| e.to_string())?;
+    let preview = SourcePreview::new(body, photo, &report, &view);
+    Ok(Loaded::Avatar(Box::new(avatar), Some(report), preview))
 }
 
 fn file_name(path: &Path) -> String {

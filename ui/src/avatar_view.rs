@@ -3,8 +3,11 @@
 
 use std::sync::Arc;
 
+use glam::Vec2;
 use guava::avatar::{Avatar, Rig};
+use guava::body::{BodyModel, PosedBody};
 use guava::gaussians::GaussianCloud;
+use guava::reconstruct::{Report, SourceImage, SourceView};
 
 use crate::body_panel::BodyState;
 use crate::viewport::SceneRef;
@@ -13,16 +16,18 @@ pub struct AvatarState {
     pub avatar: Arc<Avatar>,
     /// What it is and where it came from, shown in the panel.
     pub label: String,
+    pub source: Option<SourcePreview>,
     rig: Rig,
     rigged_for: Option<u64>,
     scene: Option<SceneRef>,
 }
 
 impl AvatarState {
-    pub fn new(avatar: Avatar, label: String) -> Self {
+    pub fn new(avatar: Avatar, label: String, source: Option<SourcePreview>) -> Self {
         Self {
             avatar: Arc::new(avatar),
             label,
+            source,
             rig: Rig::default(),
             rigged_for: None,
             scene: None,
@@ -55,5 +60,90 @@ impl AvatarState {
             self.rigged_for = Some(pose_generation);
         }
         self.scene.clone()
+    }
+}
+
+/// The source photo with the pose model's keypoints and where the fitted (or tracked) body puts
+/// the same landmarks, so the user can judge the fit.
+pub struct SourcePreview {
+    image: egui::ColorImage,
+    texture: Option<egui::TextureHandle>,
+    /// Per keypoint: where the model saw it (pixels of the square crop), its confidence, and the
+    /// source body's landmark projected by the source camera.
+    points: Vec<(Vec2, f32, Vec2)>,
+    pub rms_px: Option<f32>,
+}
+
+impl SourcePreview {
+    /// `None` when the pose model did not run (a photo with alpha and tracking).
+    pub fn new(
+        body: &BodyModel,
+        photo: &std::path::Path,
+        report: &Report,
+        view: &SourceView,
+    ) -> Option<Self> {
+        if report.keypoints.is_empty() {
+            return None;
+        }
+        let source = SourceImage::load(photo).ok()?;
+        let size = source.size as usize;
+        let pixels = source
+            .rgb
+            .chunks_exact(3)
+            .map(|c| {
+                let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+                egui::Color32::from_rgb(q(c[0]), q(c[1]), q(c[2]))
+            })
+            .collect();
+        let mut posed = PosedBody::default();
+        body.pose(&view.pose, &mut posed).ok()?;
+        let landmarks = body.landmark_positions(&posed.vertices);
+        let points = report
+            .keypoints
+            .iter()
+            .filter_map(|k| {
+                let l = body.landmarks.iter().position(|l| l.name == k.name)?;
+                let q = view.camera.project(landmarks[l]);
+                Some((k.pixel, k.confidence, Vec2::new(q.x, q.y)))
+            })
+            .collect();
+        Some(Self {
+            image: egui::ColorImage::new([size, size], pixels),
+            texture: None,
+            points,
+            rms_px: report.fit.as_ref().map(|f| f.rms_px),
+        })
+    }
+
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        let image = self.image.clone();
+        let texture = self.texture.get_or_insert_with(|| {
+            ui.ctx()
+                .load_texture("source photo", image, Default::default())
+        });
+        let side = ui.available_width().min(320.0);
+        let response = ui.add(egui::Image::new((texture.id(), egui::vec2(side, side))));
+        let rect = response.rect;
+        let scale = side / self.image.size[0] as f32;
+        let to_screen = |p: Vec2| rect.min + egui::vec2(p.x, p.y) * scale;
+        let painter = ui.painter_at(rect);
+        for &(seen, confidence, fitted) in &self.points {
+            let (a, b) = (to_screen(seen), to_screen(fitted));
+            let used = confidence >= guava::fit::MIN_CONFIDENCE;
+            let colour = if used {
+                egui::Color32::from_rgb(80, 230, 80)
+            } else {
+                egui::Color32::from_gray(150)
+            };
+            painter.line_segment([a, b], egui::Stroke::new(1.0, egui::Color32::YELLOW));
+            painter.circle_stroke(a, 3.5, egui::Stroke::new(1.5, colour));
+            painter.circle_filled(b, 2.5, egui::Color32::from_rgb(240, 60, 60));
+        }
+        ui.label(match self.rms_px {
+            Some(rms) => format!(
+                "green: keypoints used (grey: not confident); red: the fitted body's landmarks; fit {rms:.1} px RMS"
+            ),
+            None => "green: keypoints found; red: the tracked body's landmarks".into(),
+        });
     }
 }

@@ -142,10 +142,10 @@ fn the_default_body_is_shown_and_re_posed_only_when_a_slider_moves() {
     );
 }
 
-/// Steps the app until `done` holds or 10 s pass (loading runs on a worker thread).
+/// Steps the app until `done` holds or 30 s pass (loading runs on a worker thread).
 fn wait_until(h: &mut Harness<'static, GuavaApp>, done: impl Fn(&GuavaApp) -> bool) {
     let start = Instant::now();
-    while !done(h.state()) && start.elapsed() < Duration::from_secs(10) {
+    while !done(h.state()) && start.elapsed() < Duration::from_secs(30) {
         h.step();
         std::thread::sleep(Duration::from_millis(10));
     }
@@ -348,5 +348,16 @@ fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
     let status = wait_for_status(&mut h, "broken.guava");
     assert!(status.contains("broken.guava: header"), "{status}");
     assert_eq!(h.state().avatar_info().map(|(_, n)| n), Some(count));
+
+    // A real photo with no tracking beside it is fitted first (the demo portrait, copied alone).
+    let portrait = dir.join("portrait.png");
+    std::fs::copy(guava_ui::app::demo_portrait(), &portrait).expect("copy portrait");
+    h.state_mut().open(portrait);
+    wait_until(&mut h, |app| {
+        app.avatar_info()
+            .is_some_and(|(l, _)| l.contains("portrait.png"))
+    });
+    let (label, _) = h.state().avatar_info().expect("reconstructed");
+    assert!(label.contains("pose and camera fitted to"), "{label}");
     std::fs::remove_dir_all(&dir).ok();
 }
