@@ -44,6 +44,27 @@ impl Camera {
         }
     }
 
+    /// GUAVA's camera (`tan(fov/2) = 1/invtanfov` across the square) on a `width × height`
+    /// viewport: the square becomes the viewport's shorter side, centred.
+    pub fn guava_in_viewport(
+        view_from_world: Mat4,
+        invtanfov: f32,
+        width: u32,
+        height: u32,
+    ) -> Self {
+        let focal = invtanfov * width.min(height) as f32 / 2.0;
+        Self {
+            view_from_world,
+            width,
+            height,
+            fx: focal,
+            fy: focal,
+            cx: width as f32 / 2.0,
+            cy: height as f32 / 2.0,
+            near: REFERENCE_NEAR,
+        }
+    }
+
     /// Square pixels, vertical field of view `fov_y_rad`, any aspect.
     pub fn from_fov_y(view_from_world: Mat4, width: u32, height: u32, fov_y_rad: f32) -> Self {
         let fy = 0.5 * height as f32 / (0.5 * fov_y_rad).tan();

@@ -10,6 +10,7 @@ use crate::viewport::{
 };
 use guava::avatar::Avatar;
 use guava::body::BodyModel;
+use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
 use guava::render::present::PresentMode;
 use guava::render::splatter::max_gaussians;
@@ -53,6 +54,17 @@ pub enum View {
     Avatar,
 }
 
+/// Where the viewport looks from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraMode {
+    /// The orbit camera (mouse and sliders).
+    Orbit,
+    /// The camera of the photo the avatar was reconstructed from.
+    Source,
+    /// The motion's tracked camera at the current time.
+    Tracked,
+}
+
 /// What a worker thread loaded.
 enum Loaded {
     Cloud(GaussianCloud),
@@ -64,6 +76,7 @@ enum Loaded {
         Box<Avatar>,
         Option<guava::reconstruct::Report>,
         Option<SourcePreview>,
+        Option<(glam::Mat4, f32)>,
     ),
 }
 
@@ -87,6 +100,7 @@ pub struct GuavaApp {
     view: View,
     next_generation: u64,
     orbit: OrbitCamera,
+    camera_mode: CameraMode,
     display: DisplaySettings,
     background: [f32; 3],
     report: Arc<Mutex<ViewportReport>>,
@@ -127,6 +141,7 @@ impl GuavaApp {
             view: View::Body,
             next_generation: 0,
             orbit: OrbitCamera::default(),
+            camera_mode: CameraMode::Orbit,
             display: DisplaySettings::default(),
             background: [0.0; 3],
             report: Arc::default(),
@@ -280,6 +295,16 @@ impl GuavaApp {
         self.status.as_ref().map(|(s, _)| s.as_str())
     }
 
+    pub fn camera_mode(&self) -> CameraMode {
+        self.camera_mode
+    }
+
+    /// Looks through the orbit, the source photo's or the motion's tracked camera (the panel's
+    /// choice); a camera the current content lacks falls back to the orbit.
+    pub fn set_camera_mode(&mut self, mode: CameraMode) {
+        self.camera_mode = mode;
+    }
+
     /// Turns the orbit camera (what dragging or the yaw slider does).
     pub fn set_yaw_deg(&mut self, yaw: f32) {
         self.orbit.yaw_rad = yaw.to_radians();
@@ -364,7 +389,7 @@ impl GuavaApp {
         std::thread::spawn(move || {
             let result = match kind {
                 Kind::Avatar => Avatar::load(&worker_path)
-                    .map(|a| Loaded::Avatar(Box::new(a), None, None))
+                    .map(|a| Loaded::Avatar(Box::new(a), None, None, None))
                     .map_err(|e| e.to_string()),
                 Kind::Photo(tracking, body) => reconstruct_worker(
                     &body,
@@ -431,7 +456,13 @@ impl GuavaApp {
                     SYNTHETIC_PHOTO,
                     &mut progress(&worker_stage, &worker_cancel),
                 )
-                .map(|(a, r)| Loaded::Avatar(Box::new(a), Some(r), None))
+                .map(|(a, r)| {
+                    let camera = (
+                        view.camera.view_from_world,
+                        2.0 * view.camera.fx / view.camera.width as f32,
+                    );
+                    Loaded::Avatar(Box::new(a), Some(r), None, Some(camera))
+                })
                 .map_err(|e| e.to_string())
             };
             let _ = tx.send(run());
@@ -452,6 +483,7 @@ impl GuavaApp {
         avatar: Avatar,
         report: Option<guava::reconstruct::Report>,
         preview: Option<SourcePreview>,
+        source_camera: Option<(glam::Mat4, f32)>,
     ) {
         let Some(body) = &mut self.body else {
             return self.error("no body to pose the avatar on".into());
@@ -485,7 +517,8 @@ impl GuavaApp {
             ),
             false,
         ));
-        self.avatar = Some(AvatarState::new(avatar, label, preview));
+        self.avatar = Some(AvatarState::new(avatar, label, preview, source_camera));
+        self.camera_mode = CameraMode::Orbit;
         self.view = View::Avatar;
         self.reset_camera();
     }
@@ -532,8 +565,8 @@ impl GuavaApp {
                         let label = format!("{} — {}", file_name(&path), imported.tracking.source);
                         self.set_motion(label, imported);
                     }
-                    Ok(Loaded::Avatar(avatar, report, preview)) => {
-                        self.accept_avatar(&path, *avatar, report, preview)
+                    Ok(Loaded::Avatar(avatar, report, preview, camera)) => {
+                        self.accept_avatar(&path, *avatar, report, preview, camera)
                     }
                     Err(e) => self.error(e),
                 }
@@ -715,23 +748,50 @@ impl GuavaApp {
         }
         ui.separator();
         ui.heading("Camera");
+        let source = self.avatar.as_ref().and_then(|a| a.source_camera).is_some()
+            && self.view == View::Avatar;
+        let tracked =
+            self.motion.as_ref().and_then(|m| m.camera()).is_some() && self.view != View::Gaussians;
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut self.camera_mode, CameraMode::Orbit, "orbit");
+            ui.add_enabled_ui(source, |ui| {
+                ui.selectable_value(&mut self.camera_mode, CameraMode::Source, "source photo")
+                    .on_hover_text("the camera of the photo the avatar was reconstructed from");
+            });
+            ui.add_enabled_ui(tracked, |ui| {
+                ui.selectable_value(&mut self.camera_mode, CameraMode::Tracked, "tracked")
+                    .on_hover_text("the motion's tracked camera, following the timeline");
+            });
+        });
         let o = &mut self.orbit;
         let mut yaw = o.yaw_rad.to_degrees();
         let mut pitch = o.pitch_rad.to_degrees();
         let mut fov = o.fov_y_rad.to_degrees();
-        ui.add(egui::Slider::new(&mut yaw, -180.0..=180.0).text("yaw °"));
-        ui.add(egui::Slider::new(&mut pitch, -88.0..=88.0).text("pitch °"));
-        ui.add(egui::Slider::new(&mut fov, 5.0..=120.0).text("fov y °"));
-        ui.add(
-            egui::Slider::new(&mut o.distance, 0.01..=100.0)
-                .logarithmic(true)
-                .text("distance"),
-        );
+        let mut moved = ui
+            .add(egui::Slider::new(&mut yaw, -180.0..=180.0).text("yaw °"))
+            .changed();
+        moved |= ui
+            .add(egui::Slider::new(&mut pitch, -88.0..=88.0).text("pitch °"))
+            .changed();
+        moved |= ui
+            .add(egui::Slider::new(&mut fov, 5.0..=120.0).text("fov y °"))
+            .changed();
+        moved |= ui
+            .add(
+                egui::Slider::new(&mut o.distance, 0.01..=100.0)
+                    .logarithmic(true)
+                    .text("distance"),
+            )
+            .changed();
         o.yaw_rad = yaw.to_radians();
         o.pitch_rad = pitch.to_radians();
         o.fov_y_rad = fov.to_radians();
         if ui.button("Reset camera").clicked() {
+            moved = true;
             self.reset_camera();
+        }
+        if moved {
+            self.camera_mode = CameraMode::Orbit;
         }
         ui.separator();
         ui.heading("Display");
@@ -815,9 +875,11 @@ impl GuavaApp {
             return;
         }
         if response.double_clicked() {
+            self.camera_mode = CameraMode::Orbit;
             self.reset_camera();
-        } else {
-            self.orbit.handle(&response, ui);
+        } else if self.orbit.handle(&response, ui) {
+            // Dragging or zooming takes the view back to the orbit camera.
+            self.camera_mode = CameraMode::Orbit;
         }
         let ppp = ui.ctx().pixels_per_point();
         let (w, h) = (
@@ -858,9 +920,18 @@ impl GuavaApp {
             },
             _ => return,
         };
+        let fixed = match self.camera_mode {
+            CameraMode::Orbit => None,
+            CameraMode::Source => self.avatar.as_ref().and_then(|a| a.source_camera),
+            CameraMode::Tracked => self.motion.as_ref().and_then(|m| m.camera()),
+        };
+        let camera = match fixed {
+            Some((w2c, invtanfov)) => Camera::guava_in_viewport(w2c, invtanfov, w, h),
+            None => self.orbit.camera(w, h),
+        };
         let callback = ViewportCallback {
             content,
-            camera: self.orbit.camera(w, h),
+            camera,
             report: self.report.clone(),
         };
         ui.painter()
@@ -992,7 +1063,16 @@ fn reconstruct_worker(
     )
     .map_err(|e| e.to_string())?;
     let preview = SourcePreview::new(body, photo, &report, &view);
-    Ok(Loaded::Avatar(Box::new(avatar), Some(report), preview))
+    let camera = (
+        view.camera.view_from_world,
+        2.0 * view.camera.fx / view.camera.width as f32,
+    );
+    Ok(Loaded::Avatar(
+        Box::new(avatar),
+        Some(report),
+        preview,
+        Some(camera),
+    ))
 }
 
 fn file_name(path: &Path) -> String {

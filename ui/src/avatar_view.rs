@@ -17,17 +17,25 @@ pub struct AvatarState {
     /// What it is and where it came from, shown in the panel.
     pub label: String,
     pub source: Option<SourcePreview>,
+    /// The source photo's camera (world→camera, `invtanfov`), when the avatar was made here.
+    pub source_camera: Option<(glam::Mat4, f32)>,
     rig: Rig,
     rigged_for: Option<u64>,
     scene: Option<SceneRef>,
 }
 
 impl AvatarState {
-    pub fn new(avatar: Avatar, label: String, source: Option<SourcePreview>) -> Self {
+    pub fn new(
+        avatar: Avatar,
+        label: String,
+        source: Option<SourcePreview>,
+        source_camera: Option<(glam::Mat4, f32)>,
+    ) -> Self {
         Self {
             avatar: Arc::new(avatar),
             label,
             source,
+            source_camera,
             rig: Rig::default(),
             rigged_for: None,
             scene: None,

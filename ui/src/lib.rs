@@ -8,4 +8,4 @@ pub mod motion;
 pub mod orbit;
 pub mod viewport;
 
-pub use app::{GuavaApp, Options, View};
+pub use app::{CameraMode, GuavaApp, Options, View};

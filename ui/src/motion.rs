@@ -59,6 +59,12 @@ impl Motion {
         &self.notes
     }
 
+    /// The tracked camera at the current time (world→camera in OpenCV axes, `invtanfov`), when
+    /// the motion has cameras.
+    pub fn camera(&self) -> Option<(glam::Mat4, f32)> {
+        guava::tracking::camera_at(&self.tracking, self.player.time())
+    }
+
     pub fn is_playing(&self) -> bool {
         self.player.playing
     }

@@ -2,7 +2,7 @@
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use guava_ui::{GuavaApp, Options, View};
+use guava_ui::{CameraMode, GuavaApp, Options, View};
 use std::time::{Duration, Instant};
 
 /// One frame through the whole pipeline: UI logic, then a real render (paint callbacks included).
@@ -340,6 +340,16 @@ fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
         before + 1,
         "a pose change splats once"
     );
+    // Looking through the photo's camera renders once, from there.
+    h.state_mut().set_camera_mode(CameraMode::Source);
+    frame(&mut h);
+    frame(&mut h);
+    assert_eq!(
+        h.state().report().renders,
+        before + 2,
+        "a camera change splats once"
+    );
+    assert_eq!(h.state().camera_mode(), CameraMode::Source);
 
     // A broken avatar file is reported by name and the avatar stays.
     let bad = dir.join("broken.guava");
