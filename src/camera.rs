@@ -96,6 +96,11 @@ impl Camera {
         rot * Mat4::from_translation(-eye)
     }
 
+    /// 1/tan(fov/2) across the width: GUAVA's `invtanfov` of a square camera.
+    pub fn invtanfov(&self) -> f32 {
+        2.0 * self.fx / self.width as f32
+    }
+
     /// A world point in pixel-edge coordinates (x, y) and its view depth z. Not clipped: callers
     /// test `z` against their own near limit.
     pub fn project(&self, world: Vec3) -> Vec3 {

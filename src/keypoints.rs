@@ -12,6 +12,8 @@ use std::path::Path;
 use glam::Vec2;
 
 use crate::onnx::{OnnxError, OnnxRuntime, Session, TensorF32};
+use crate::reconstruct::SourceImage;
+use crate::reconstruct::fill::bilinear_clamped;
 
 /// The converted model shipped in the repository.
 pub const POSE_MODEL_PATH: &str = concat!(
@@ -68,18 +70,11 @@ impl PoseKeypoints {
     /// The mask resized (bilinear) to `side`² for a source image of that size.
     pub fn mask_at(&self, side: usize) -> Vec<f32> {
         let scale = POSE_INPUT as f32 / side as f32;
-        let max = (POSE_INPUT - 1) as f32;
-        let at = |r: usize, c: usize| self.mask[r * POSE_INPUT + c];
+        let centre = |i: usize| (i as f32 + 0.5) * scale - 0.5;
         (0..side * side)
             .map(|i| {
-                let x = (((i % side) as f32 + 0.5) * scale - 0.5).clamp(0.0, max);
-                let y = (((i / side) as f32 + 0.5) * scale - 0.5).clamp(0.0, max);
-                let (x0, y0) = (x.floor() as usize, y.floor() as usize);
-                let (x1, y1) = ((x0 + 1).min(POSE_INPUT - 1), (y0 + 1).min(POSE_INPUT - 1));
-                let (fx, fy) = (x - x0 as f32, y - y0 as f32);
-                let top = at(y0, x0) * (1.0 - fx) + at(y0, x1) * fx;
-                let bottom = at(y1, x0) * (1.0 - fx) + at(y1, x1) * fx;
-                top * (1.0 - fy) + bottom * fy
+                let (x, y) = (centre(i % side), centre(i / side));
+                bilinear_clamped(POSE_INPUT, x, y, |k| self.mask[k])
             })
             .collect()
     }
@@ -112,6 +107,13 @@ impl PoseLandmarker {
             });
         }
         Ok(Self { session })
+    }
+
+    /// Runs the model on a source image (its RGB as loaded, before any mask is applied);
+    /// keypoints come in the source's pixels.
+    pub fn detect(&mut self, source: &SourceImage) -> Result<PoseKeypoints, OnnxError> {
+        let input = downsample_to_input(&source.rgb, source.size as usize);
+        self.run(&input, source.size as f32)
     }
 
     /// Runs the model on a 256² RGB input in [0, 1] (row-major, interleaved); keypoints are
@@ -160,7 +162,7 @@ impl PoseLandmarker {
 
 /// A `side`² RGB image in [0, 1] (interleaved) box-filtered down to the model's 256² input;
 /// `side` must be a multiple of 256.
-pub fn downsample_to_input(rgb: &[f32], side: usize) -> Vec<f32> {
+fn downsample_to_input(rgb: &[f32], side: usize) -> Vec<f32> {
     let k = side / POSE_INPUT;
     assert!(
         k >= 1 && k * POSE_INPUT == side,

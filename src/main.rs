@@ -343,8 +343,7 @@ fn fit(image: &Path, out: &Path) -> Result<()> {
     let source = SourceImage::load(image)?;
     let mut model = landmarker()?;
     let t0 = std::time::Instant::now();
-    let input = guava::keypoints::downsample_to_input(&source.rgb, source.size as usize);
-    let found = model.run(&input, source.size as f32)?;
+    let found = model.detect(&source)?;
     let t1 = std::time::Instant::now();
     let (view, report) = guava::fit::fit_keypoints(&body, &found.keypoints, source.size)
         .map_err(|e| anyhow::anyhow!("{}: {e}", image.display()))?;

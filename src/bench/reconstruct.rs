@@ -11,7 +11,7 @@ use crate::avatar::Rig;
 use crate::body::{BodyModel, BodyPose, PosedBody};
 use crate::fit::fit_keypoints;
 use crate::gaussians::GaussianCloud;
-use crate::keypoints::{PoseLandmarker, downsample_to_input};
+use crate::keypoints::PoseLandmarker;
 use crate::onnx::OnnxRuntime;
 use crate::reconstruct::synthetic::{banded_texture, photo, upper_body_camera};
 use crate::reconstruct::{
@@ -109,8 +109,7 @@ fn fit_demo_portrait(body: &BodyModel, iterations: usize) -> anyhow::Result<()> 
     let mut last = None;
     for i in 0..iterations.min(10) + 1 {
         let t0 = Instant::now();
-        let input = downsample_to_input(&source.rgb, source.size as usize);
-        let found = model.run(&input, source.size as f32)?;
+        let found = model.detect(&source)?;
         let t1 = Instant::now();
         let (_, report) = fit_keypoints(body, &found.keypoints, source.size)?;
         if i > 0 {

@@ -260,9 +260,8 @@ pub fn reconstruct_photo_file(
         if !progress(Stage::Fit) {
             return Err(ReconstructError::Cancelled);
         }
-        let input = crate::keypoints::downsample_to_input(&image.rgb, image.size as usize);
         let found = landmarker
-            .run(&input, image.size as f32)
+            .detect(&image)
             .map_err(|e| ReconstructError::Keypoints(e.to_string()))?;
         keypoints = Some(found);
     }

@@ -21,8 +21,6 @@ pub struct SourceImage {
     pub rgb: Vec<f32>,
     /// Person mask in [0, 1]; `None` until known (no alpha channel and no mask given yet).
     pub mask: Option<Vec<f32>>,
-    /// The file's pixel size before cropping, for messages.
-    pub original: (u32, u32),
 }
 
 impl SourceImage {
@@ -82,7 +80,6 @@ impl SourceImage {
             size: SOURCE_SIZE,
             rgb,
             mask: use_alpha.then_some(mask),
-            original: (w, h),
         })
     }
 

@@ -98,7 +98,7 @@ pub fn tracking_of(body: &BodyModel, view: &SourceView, source: &str) -> Trackin
             .collect(),
         camera: Some(TrackedCamera {
             w2c: rows,
-            invtanfov: 2.0 * view.camera.fx / view.camera.width as f32,
+            invtanfov: view.camera.invtanfov(),
         }),
     });
     tracking

@@ -457,10 +457,7 @@ impl GuavaApp {
                     &mut progress(&worker_stage, &worker_cancel),
                 )
                 .map(|(a, r)| {
-                    let camera = (
-                        view.camera.view_from_world,
-                        2.0 * view.camera.fx / view.camera.width as f32,
-                    );
+                    let camera = (view.camera.view_from_world, view.camera.invtanfov());
                     Loaded::Avatar(Box::new(a), Some(r), None, Some(camera))
                 })
                 .map_err(|e| e.to_string())
@@ -1063,10 +1060,7 @@ fn reconstruct_worker(
     )
     .map_err(|e| e.to_string())?;
     let preview = SourcePreview::new(body, photo, &report, &view);
-    let camera = (
-        view.camera.view_from_world,
-        2.0 * view.camera.fx / view.camera.width as f32,
-    );
+    let camera = (view.camera.view_from_world, view.camera.invtanfov());
     Ok(Loaded::Avatar(
         Box::new(avatar),
         Some(report),

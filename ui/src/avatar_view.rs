@@ -124,10 +124,10 @@ impl SourcePreview {
     }
 
     pub fn ui(&mut self, ui: &mut egui::Ui) {
-        let image = self.image.clone();
+        // Uploaded once; the image is copied only then.
         let texture = self.texture.get_or_insert_with(|| {
             ui.ctx()
-                .load_texture("source photo", image, Default::default())
+                .load_texture("source photo", self.image.clone(), Default::default())
         });
         let side = ui.available_width().min(320.0);
         let response = ui.add(egui::Image::new((texture.id(), egui::vec2(side, side))));
