@@ -10,8 +10,7 @@ use guava::body::{
 };
 use guava::npz::Npz;
 
-mod npz_writer;
-use npz_writer::{f32_bytes, npy};
+use crate::npz_writer::{f32_bytes, npy};
 
 const MODEL: &str = "tests/data/ehm_synthetic.npz";
 const PARITY: &str = "tests/data/ehm_parity.npz";

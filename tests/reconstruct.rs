@@ -2,8 +2,6 @@
 //! cameras and poses (src/reconstruct/synthetic.rs), reconstructed and re-rendered through the
 //! splatting pass; visibility against occluders; degenerate inputs; the avatar file.
 
-mod common;
-
 use glam::{Mat3A, Vec3};
 use guava::avatar::{Avatar, Rig, quat_from_matrix, quat_mul};
 use guava::body::{BodyModel, BodyPose, PosedBody};
@@ -174,10 +172,10 @@ fn reconstruction_re_renders_the_photo() {
     assert!(avatar.len() < 150_000);
     assert!(report.observed > 20_000, "{report:?}");
     let cloud = cloud_for(&avatar, &view.pose);
-    let (render, stats) = common::renderer()
+    let (render, stats) = crate::common::renderer()
         .render(&cloud, &view.camera, &[0.0; 4])
         .expect("fits");
-    common::assert_all_finite(&render, "reconstruction");
+    crate::common::assert_all_finite(&render, "reconstruction");
     let (psnr, pixels) = psnr_inside(&render, &image, 2);
     println!("PSNR {psnr:.2} dB over {pixels} pixels; {stats:?}");
     assert!(

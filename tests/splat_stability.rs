@@ -1,9 +1,7 @@
 //! Stiff and extreme inputs: the splatting pass must give finite output, count what it drops, and
 //! neither panic nor lose the device (wgpu's default error handler panics on validation errors).
 
-mod common;
-
-use common::{assert_all_finite, renderer};
+use crate::common::{assert_all_finite, renderer};
 use glam::{Mat4, Vec3};
 use guava::camera::{Camera, orbit};
 use guava::gaussians::GaussianCloud;
@@ -49,7 +47,7 @@ fn extreme_scales_and_needles_match_the_reference() {
     assert_all_finite(&gpu, "extreme scales");
     let (cpu, cpu_stats) = reference::render(&cloud, &camera, &[0.0; 3]);
     assert_eq!(stats, cpu_stats);
-    let d = common::diff(&gpu, &cpu);
+    let d = crate::common::diff(&gpu, &cpu);
     println!("extreme scales: {d:?} {stats:?}");
     // Needles make the 2D covariance nearly singular; f32 loses digits there, so only a loose bound.
     assert!(d.max_abs <= 2e-2, "{d:?}");
@@ -137,7 +135,7 @@ fn one_by_one_and_4096_square_outputs() {
     let (tiny, _) = r.render(&cloud, &front_camera(1), &[0.0; 3]).expect("fits");
     assert_all_finite(&tiny, "1×1");
     let (cpu, _) = reference::render(&cloud, &front_camera(1), &[0.0; 3]);
-    assert!(common::diff(&tiny, &cpu).max_abs < 1e-4);
+    assert!(crate::common::diff(&tiny, &cpu).max_abs < 1e-4);
     let (big, stats) = r
         .render(&cloud, &front_camera(4096), &[0.0; 3])
         .expect("fits");
@@ -228,7 +226,7 @@ fn reused_buffers_give_identical_frames() {
         for _ in 0..3 {
             let (image, stats) = r.render(cloud, &camera, &[0.0; 3]).expect("fits");
             assert_eq!(stats, reference_stats);
-            assert!(common::diff(&image, &reference_image).max_abs < 1e-3);
+            assert!(crate::common::diff(&image, &reference_image).max_abs < 1e-3);
         }
     }
     let (again, stats_again) = r.render(&big, &camera, &[0.0; 3]).expect("fits");

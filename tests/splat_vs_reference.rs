@@ -7,9 +7,7 @@
 //! is why the max-error bound is 1e-3 rather than f32 round-off; the PSNR bound checks that such
 //! pixels stay rare.
 
-mod common;
-
-use common::{assert_all_finite, diff, renderers};
+use crate::common::{assert_all_finite, diff, renderers};
 use glam::{Mat4, Vec3};
 use guava::camera::{Camera, GUAVA_INVTANFOV, orbit};
 use guava::gaussians::GaussianCloud;

@@ -10,8 +10,7 @@ use guava::tracking::{
     BodyKind, EhmIdentityRecord, Frame, Player, Retarget, TrackedCamera, Tracking, camera_at,
 };
 
-mod npz_writer;
-use npz_writer::{npy, npy_f32, npz};
+use crate::npz_writer::{npy, npy_f32, npz};
 
 const DEMO: &str = "assets/demo_motion.json";
 

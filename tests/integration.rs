@@ -1,0 +1,20 @@
+//! The integration tests, one module per area, in one test binary: each binary links the whole
+//! library with wgpu and ONNX Runtime, so one link instead of fifteen keeps CI's build short.
+//! `playback_memory` counts heap bytes with its own global allocator and stays a binary of its own.
+
+mod common;
+mod npz_writer;
+
+mod body;
+mod cli;
+mod ehm;
+mod fit;
+mod mesh_view;
+mod onnx_runtime;
+mod ply;
+mod reconstruct;
+mod shaders;
+mod splat_stability;
+mod splat_vs_reference;
+mod tracking;
+mod tracking_convert;
