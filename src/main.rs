@@ -99,6 +99,10 @@ enum Command {
         image: PathBuf,
         #[arg(long)]
         out: PathBuf,
+        /// Also write the photo (its 512² square) with the points found (green) and where the
+        /// fitted body puts them (red), twice the size, as PNG.
+        #[arg(long)]
+        overlay: Option<PathBuf>,
     },
     /// Benchmarks (print a table).
     Bench {
@@ -197,7 +201,11 @@ fn run(cli: Cli) -> Result<()> {
             fit: force_fit,
             out,
         } => reconstruct(&image, tracking.as_deref(), force_fit, &out),
-        Command::Fit { image, out } => fit(&image, &out),
+        Command::Fit {
+            image,
+            out,
+            overlay,
+        } => fit(&image, &out, overlay.as_deref()),
         Command::Motion { file, out, ehm } => motion(&file, out.as_deref(), ehm.as_deref()),
         Command::Bench { which } => match which {
             Bench::Splat(args) => guava::bench::splat(&args),
@@ -252,9 +260,8 @@ fn synth_photo(out: &Path, yaw: f32) -> Result<()> {
     .with_context(|| format!("writing {}", out.display()))?;
     let tracking_path = guava::reconstruct::tracking_beside(out);
     let name = out.file_name().unwrap_or_default().to_string_lossy();
-    synthetic::tracking_of(
+    view.to_tracking(
         &body,
-        &view,
         &format!("synthetic photo {name} (guava synth-photo)"),
     )
     .save(&tracking_path)?;
@@ -266,10 +273,26 @@ fn synth_photo(out: &Path, yaw: f32) -> Result<()> {
     Ok(())
 }
 
-/// The pose model on the installed ONNX Runtime.
-fn landmarker() -> Result<guava::keypoints::PoseLandmarker> {
+/// The keypoint models on the installed ONNX Runtime.
+fn landmarkers() -> Result<guava::keypoints::Landmarkers> {
     let runtime = guava::onnx::OnnxRuntime::load()?;
-    Ok(guava::keypoints::PoseLandmarker::load(runtime)?)
+    Ok(guava::keypoints::Landmarkers::load(runtime)?)
+}
+
+/// One line on the fit, and one on its face stage.
+fn print_fit(f: &guava::fit::FitReport) {
+    println!(
+        "  fitted to {} body keypoints: {:.1} px RMS after {} iterations",
+        f.keypoints_used, f.rms_px, f.iterations
+    );
+    match (&f.face, &f.face_skipped) {
+        (Some(face), _) => println!(
+            "  face: {} face-mesh points, {:.1} px RMS (rest expression: {:.1} px); the face is {:.2}× the default body's",
+            face.points_used, face.rms_px, face.rms_before_px, face.face_scale
+        ),
+        (None, Some(why)) => println!("  face not fitted: {why}"),
+        (None, None) => {}
+    }
 }
 
 fn reconstruct(image: &Path, tracking: Option<&Path>, fit: bool, out: &Path) -> Result<()> {
@@ -286,10 +309,10 @@ fn reconstruct(image: &Path, tracking: Option<&Path>, fit: bool, out: &Path) -> 
         None => Tracked::Fit,
     };
     // The pose model gives the mask of a photo without alpha, and the fit; optional otherwise.
-    let mut model = match (&tracked, landmarker()) {
+    let mut model = match (&tracked, landmarkers()) {
         (_, Ok(m)) => Some(m),
         (Tracked::Fit, Err(e)) => return Err(e.context("fitting the photo needs the pose model")),
-        (Tracked::File(_), Err(e)) => {
+        (Tracked::File(_) | Tracked::Given(_), Err(e)) => {
             eprintln!(
                 "guava: pose model not available ({e:#}); a photo without alpha is masked by the body's silhouette"
             );
@@ -312,10 +335,7 @@ fn reconstruct(image: &Path, tracking: Option<&Path>, fit: bool, out: &Path) -> 
         out.display()
     );
     if let Some(f) = &report.fit {
-        println!(
-            "  fitted to {} keypoints: {:.1} px RMS after {} iterations",
-            f.keypoints_used, f.rms_px, f.iterations
-        );
+        print_fit(f);
     }
     println!(
         "  texels: {} valid, {} seen by the camera, {} filled by symmetry, the rest inpainted; mask from {}",
@@ -337,39 +357,102 @@ fn reconstruct(image: &Path, tracking: Option<&Path>, fit: bool, out: &Path) -> 
 }
 
 /// Fits the default body to a photo's keypoints and writes the result as a tracking file.
-fn fit(image: &Path, out: &Path) -> Result<()> {
-    use guava::reconstruct::{SourceImage, synthetic::tracking_of};
+fn fit(image: &Path, out: &Path, overlay: Option<&Path>) -> Result<()> {
+    use guava::reconstruct::SourceImage;
     let body = guava::body::BodyModel::default_body()?;
     let source = SourceImage::load(image)?;
-    let mut model = landmarker()?;
+    let mut models = landmarkers()?;
     let t0 = std::time::Instant::now();
-    let found = model.detect(&source)?;
+    let found = models.detect(&source)?;
     let t1 = std::time::Instant::now();
-    let (view, report) = guava::fit::fit_keypoints(&body, &found.keypoints, source.size)
+    let (view, report) = guava::fit::fit_detections(&body, &found, &mut models.face, source.size)
         .map_err(|e| anyhow::anyhow!("{}: {e}", image.display()))?;
     let t2 = std::time::Instant::now();
     let name = image.file_name().unwrap_or_default().to_string_lossy();
-    tracking_of(
+    view.to_tracking(
         &body,
-        &view,
-        &format!("fitted by guava fit to {name}: pose_landmark_full keypoints, default body"),
+        &format!(
+            "fitted by guava fit to {name}: pose_landmark_full keypoints{}, default body",
+            if report.face.is_some() {
+                " and face_landmark face mesh"
+            } else {
+                ""
+            }
+        ),
     )
     .save(out)?;
     println!(
-        "{}: person presence {:.2}; fitted to {} keypoints, {:.1} px RMS, {} iterations → {}",
+        "{}: person presence {:.2} → {}",
         image.display(),
-        found.presence,
-        report.keypoints_used,
-        report.rms_px,
-        report.iterations,
+        found.pose.presence,
         out.display()
     );
+    print_fit(&report);
     println!(
-        "  keypoint model {:.0} ms, fit {:.0} ms",
+        "  keypoint models {:.0} ms, fit {:.0} ms",
         (t1 - t0).as_secs_f64() * 1e3,
         (t2 - t1).as_secs_f64() * 1e3
     );
+    if let Some(path) = overlay {
+        write_fit_overlay(&body, &source, &found, &view, &report, path)?;
+        println!("  overlay → {}", path.display());
+    }
     Ok(())
+}
+
+/// The photo at twice its size with each point found (green) joined to where the fitted body
+/// puts it (red): body keypoints as rings, face-mesh points as dots.
+fn write_fit_overlay(
+    body: &guava::body::BodyModel,
+    source: &guava::reconstruct::SourceImage,
+    found: &guava::keypoints::Detections,
+    view: &guava::reconstruct::SourceView,
+    report: &guava::fit::FitReport,
+    path: &Path,
+) -> Result<()> {
+    const SCALE: f32 = 2.0;
+    let side = source.size * SCALE as u32;
+    let mut canvas = image::RgbImage::from_fn(side, side, |x, y| {
+        let i = (y / SCALE as u32 * source.size + x / SCALE as u32) as usize;
+        let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0) as u8;
+        image::Rgb([0, 1, 2].map(|c| q(source.rgb[3 * i + c])))
+    });
+    let mut dot = |p: glam::Vec2, radius: f32, colour: [u8; 3], ring: bool| {
+        let c = p * SCALE;
+        let r = radius.ceil() as i32 + 1;
+        for dy in -r..=r {
+            for dx in -r..=r {
+                let d = ((dx * dx + dy * dy) as f32).sqrt();
+                let hit = if ring {
+                    (d - radius).abs() < 0.8
+                } else {
+                    d <= radius
+                };
+                let (x, y) = (c.x as i32 + dx, c.y as i32 + dy);
+                if hit && x >= 0 && y >= 0 && (x as u32) < side && (y as u32) < side {
+                    canvas.put_pixel(x as u32, y as u32, image::Rgb(colour));
+                }
+            }
+        }
+    };
+    let (green, red) = ([60, 230, 60], [240, 40, 40]);
+    let mut posed = guava::body::PosedBody::default();
+    body.pose(&view.pose, &mut posed)?;
+    let marks = body.landmark_positions(&posed.vertices);
+    for k in &found.pose.keypoints {
+        if let Some(l) = body.landmarks.iter().position(|l| l.name == k.name) {
+            let q = view.camera.project(marks[l]);
+            dot(k.pixel, 4.0, green, true);
+            dot(glam::Vec2::new(q.x, q.y), 2.5, red, false);
+        }
+    }
+    if let Some(face) = &report.face {
+        for (&seen, &fitted) in face.observed.iter().zip(&face.fitted) {
+            dot(seen, 1.5, green, false);
+            dot(fitted, 1.0, red, false);
+        }
+    }
+    guava::render::save_png(&canvas, path)
 }
 
 fn motion(file: &Path, out: Option<&Path>, ehm: Option<&Path>) -> Result<()> {

@@ -589,3 +589,35 @@ fn skin_weight_and_index_corruption_is_caught() {
         load_error(&bytes)
     );
 }
+
+/// The fit's sparse posing gives what full posing gives, for landmarks and joints alike, with
+/// shape and expression morphs and rotations on every joint.
+#[test]
+fn posing_a_few_points_matches_posing_the_mesh() {
+    let body = BodyModel::default_body().expect("body");
+    let mut pose = BodyPose::rest(&body);
+    pose.translation = Vec3::new(0.1, -0.2, 0.3);
+    for (j, r) in pose.rotations.iter_mut().enumerate() {
+        let t = j as f32;
+        *r = 0.3 * Vec3::new((1.3 * t).sin(), (0.7 * t).cos(), (2.1 * t).sin());
+    }
+    for (i, c) in pose.coefficients.iter_mut().enumerate() {
+        *c = 0.5 * ((i as f32) * 0.37).sin();
+    }
+    let mut posed = PosedBody::default();
+    body.pose(&pose, &mut posed).expect("pose");
+    let expected = body.landmark_positions(&posed.vertices);
+    let mut poser = guava::body::PointPoser::new(&body, &body.landmarks);
+    let (mut points, mut joints) = (Vec::new(), Vec::new());
+    poser
+        .pose(&body, &pose, &mut points, &mut joints)
+        .expect("pose points");
+    assert_eq!(points.len(), body.landmarks.len());
+    // Same arithmetic in the same order: equal to f32 rounding.
+    for (a, b) in points.iter().zip(&expected) {
+        assert!(a.distance(*b) < 1e-6, "{a} vs {b}");
+    }
+    for (a, b) in joints.iter().zip(&posed.joints) {
+        assert!(a.distance(Vec3::from(b.translation)) < 1e-6);
+    }
+}

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Converts MediaPipe's pose landmark model to ONNX and ships the demo portrait, once, offline.
+"""Converts MediaPipe's pose and face landmark models to ONNX and ships the demo portrait, once,
+offline.
 
 Needs (not in CI; a throw-away venv of ~1.7 GB):
     pip install mediapipe==0.10.21 tensorflow-cpu tf2onnx onnxruntime==1.32.0 pillow
@@ -15,7 +16,12 @@ Writes:
 - tests/data/pose_landmark_fixture.json and tests/data/demo_portrait_256.png: the model's input
   for the demo portrait (the centred square crop resized to 256² by Pillow, 8-bit) and what the
   TFLite interpreter outputs for it, so the Rust test checks our ONNX path against MediaPipe's own.
-The converted model is checked against the TFLite interpreter on the real photo (not only random
+- assets/models/face_landmark.onnx: MediaPipe `face_landmark.tflite` (Apache-2.0, same wheel),
+  opset 17. Input [1,192,192,3] RGB in [0, 1] (a face crop with margin, eyes level); outputs
+  468×3 landmarks (x, y in input pixels, z relative depth) and a face-presence logit.
+- tests/data/face_landmark_fixture.json and tests/data/demo_face_192.png: an axis-aligned face crop
+  of the demo portrait (the box is fixed here, not our crop code) and TFLite's output for it.
+Each converted model is checked against the TFLite interpreter on the real photo (not only random
 input) before anything is written.
 """
 import argparse
@@ -45,7 +51,8 @@ def main():
 
     if mediapipe.__version__ != "0.10.21":
         sys.exit(f"need mediapipe 0.10.21 (its wheel ships the models), found {mediapipe.__version__}")
-    tflite = os.path.join(os.path.dirname(mediapipe.__file__), "modules/pose_landmark/pose_landmark_full.tflite")
+    modules = os.path.join(os.path.dirname(mediapipe.__file__), "modules")
+    tflite = os.path.join(modules, "pose_landmark/pose_landmark_full.tflite")
 
     with zipfile.ZipFile(args.skimage_wheel) as whl:
         portrait = whl.read("skimage/data/astronaut.png")
@@ -56,11 +63,7 @@ def main():
     models = os.path.join(ROOT, "assets/models")
     os.makedirs(models, exist_ok=True)
     onnx_path = os.path.join(models, "pose_landmark_full.onnx")
-    with tempfile.TemporaryDirectory() as tmp:
-        out = os.path.join(tmp, "pose.onnx")
-        subprocess.run([sys.executable, "-m", "tf2onnx.convert", "--tflite", tflite, "--output", out,
-                        "--opset", "17"], check=True, capture_output=True)
-        onnx_bytes = open(out, "rb").read()
+    onnx_bytes = to_onnx(tflite)
 
     # The model's input for the portrait: centred square (it is square), 256², [0, 1].
     image = Image.open(__import__("io").BytesIO(portrait)).convert("RGB")
@@ -69,11 +72,7 @@ def main():
     small = image.crop((left, top, left + side, top + side)).resize((256, 256), Image.BILINEAR)
     x = np.asarray(small, np.float32)[None] / 255.0
 
-    interpreter = tf.lite.Interpreter(tflite)
-    interpreter.allocate_tensors()
-    interpreter.set_tensor(interpreter.get_input_details()[0]["index"], x)
-    interpreter.invoke()
-    outputs = {d["name"]: interpreter.get_tensor(d["index"]) for d in interpreter.get_output_details()}
+    outputs = run_tflite(tf, tflite, x)
     landmarks = next(v for v in outputs.values() if v.shape == (1, 195)).reshape(39, 5)
     presence = next(v for v in outputs.values() if v.shape == (1, 1))
 
@@ -98,6 +97,58 @@ def main():
     }
     json.dump(fixture, open(os.path.join(ROOT, "tests/data/pose_landmark_fixture.json"), "w"), indent=1)
     print(f"wrote {onnx_path} ({len(onnx_bytes) / 1e6:.1f} MB), assets/demo_portrait.png, the fixture")
+    face(tf, ort, image, os.path.join(modules, "face_landmark/face_landmark.tflite"), models)
+
+
+# The demo portrait's face, by eye: a square around it with MediaPipe's ~1.5× margin.
+FACE_BOX = (140, 36, 316, 212)
+
+
+def face(tf, ort, image, tflite, models):
+    from PIL import Image
+    crop = image.crop(FACE_BOX).resize((192, 192), Image.BILINEAR)
+    x = np.asarray(crop, np.float32)[None] / 255.0
+    outputs = run_tflite(tf, tflite, x)
+    landmarks = next(v for v in outputs.values() if v.size == 1404).reshape(468, 3)
+    flag = next(v for v in outputs.values() if v.size == 1).item()
+    onnx_bytes = to_onnx(tflite)
+    session = ort.InferenceSession(onnx_bytes)
+    got = session.run(None, {session.get_inputs()[0].name: x})
+    lm_onnx = next(v for v in got if v.size == 1404).reshape(468, 3)
+    worst = np.abs(lm_onnx[:, :2] - landmarks[:, :2]).max()
+    flag_onnx = next(v for v in got if v.size == 1).item()
+    if worst > 0.01 or abs(flag_onnx - flag) > 1e-3 or flag < 0:
+        sys.exit(f"face: ONNX and TFLite landmarks differ by {worst} px, flags {flag_onnx} vs {flag}")
+    print(f"face: ONNX vs TFLite within {worst:.2e} px, face logit {flag:.2f}")
+    path = os.path.join(models, "face_landmark.onnx")
+    open(path, "wb").write(onnx_bytes)
+    crop.save(os.path.join(ROOT, "tests/data/demo_face_192.png"))
+    fixture = {
+        "source": "TFLite interpreter on tests/data/demo_face_192.png / 255 (the demo portrait's "
+                  f"box {list(FACE_BOX)} resized by Pillow, bilinear)",
+        "model": "mediapipe 0.10.21 modules/face_landmark/face_landmark.tflite",
+        "landmarks": [[round(float(v), 3) for v in row] for row in landmarks],
+        "face_logit": round(flag, 4),
+        "box": list(FACE_BOX),
+    }
+    json.dump(fixture, open(os.path.join(ROOT, "tests/data/face_landmark_fixture.json"), "w"))
+    print(f"wrote {path} ({len(onnx_bytes) / 1e6:.1f} MB) and the face fixture")
+
+
+def to_onnx(tflite):
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "model.onnx")
+        subprocess.run([sys.executable, "-m", "tf2onnx.convert", "--tflite", tflite, "--output", out,
+                        "--opset", "17"], check=True, capture_output=True)
+        return open(out, "rb").read()
+
+
+def run_tflite(tf, tflite, x):
+    interpreter = tf.lite.Interpreter(tflite)
+    interpreter.allocate_tensors()
+    interpreter.set_tensor(interpreter.get_input_details()[0]["index"], x)
+    interpreter.invoke()
+    return {d["name"]: interpreter.get_tensor(d["index"]) for d in interpreter.get_output_details()}
 
 
 if __name__ == "__main__":

@@ -9,9 +9,9 @@ use super::body::cpu_name;
 use super::median;
 use crate::avatar::Rig;
 use crate::body::{BodyModel, BodyPose, PosedBody};
-use crate::fit::fit_keypoints;
+use crate::fit::fit_detections;
 use crate::gaussians::GaussianCloud;
-use crate::keypoints::PoseLandmarker;
+use crate::keypoints::Landmarkers;
 use crate::onnx::OnnxRuntime;
 use crate::reconstruct::synthetic::{banded_texture, photo, upper_body_camera};
 use crate::reconstruct::{
@@ -104,14 +104,14 @@ pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
 fn fit_demo_portrait(body: &BodyModel, iterations: usize) -> anyhow::Result<()> {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png");
     let source = SourceImage::load(&path)?;
-    let mut model = PoseLandmarker::load(OnnxRuntime::load()?)?;
+    let mut models = Landmarkers::load(OnnxRuntime::load()?)?;
     let (mut keypoint_ms, mut fit_ms) = (Vec::new(), Vec::new());
     let mut last = None;
     for i in 0..iterations.min(10) + 1 {
         let t0 = Instant::now();
-        let found = model.detect(&source)?;
+        let found = models.detect(&source)?;
         let t1 = Instant::now();
-        let (_, report) = fit_keypoints(body, &found.keypoints, source.size)?;
+        let (_, report) = fit_detections(body, &found, &mut models.face, source.size)?;
         if i > 0 {
             keypoint_ms.push(ms(t1 - t0));
             fit_ms.push(ms(t1.elapsed()));
@@ -120,11 +120,18 @@ fn fit_demo_portrait(body: &BodyModel, iterations: usize) -> anyhow::Result<()> 
     }
     let report = last.expect("ran");
     println!(
-        "fit of the demo portrait: keypoints {:.1} ms, fit {:.1} ms ({} keypoints, {:.1} px RMS, {} iterations)",
+        "fit of the demo portrait: keypoint models (pose, face ×2) {:.1} ms, fit {:.1} ms ({} body keypoints, {:.1} px RMS; {}; {} iterations)",
         median(keypoint_ms),
         median(fit_ms),
         report.keypoints_used,
         report.rms_px,
+        report.face.as_ref().map_or_else(
+            || format!(
+                "face not fitted: {}",
+                report.face_skipped.as_deref().unwrap_or("?")
+            ),
+            |f| format!("{} face points, {:.1} px RMS", f.points_used, f.rms_px)
+        ),
         report.iterations
     );
     Ok(())

@@ -17,6 +17,7 @@ mod glb;
 mod joint_map;
 mod lbs;
 mod normals;
+mod points;
 mod pose;
 
 pub use ehm::{EHM_FORMAT, EhmExtras, EhmIdentity, EhmModel, EhmParams};
@@ -24,6 +25,7 @@ pub use frames::{TriangleFrame, triangle_frames};
 pub use glb::BodyAssetError;
 pub use joint_map::{SMPLX_JOINTS, smplx_to_default};
 pub use normals::vertex_normals;
+pub use points::PointPoser;
 pub use pose::{BodyPose, Posable, PoseError, PosedBody};
 
 use glam::{Vec2, Vec3};
@@ -66,7 +68,7 @@ pub struct Joint {
 }
 
 /// A named surface point: a weighted sum of vertices (Anny's COCO-WholeBody keypoints).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Landmark {
     pub name: String,
     pub vertices: Vec<u32>,

@@ -1,22 +1,31 @@
-//! Single-image fitting: the camera and body pose of the default body that put its landmarks on
-//! a photo's 2D keypoints (Levenberg–Marquardt with a pose prior, in Rust).
+//! Single-image fitting: the camera, body pose, shape and facial expression of the default body
+//! that put its landmarks on a photo's 2D keypoints (Levenberg–Marquardt with priors, in Rust).
 //!
-//! Unknowns: the global orientation (root axis-angle), the camera translation (GUAVA's camera:
-//! `invtanfov` 24, looking at the body's front, so its distance sets the scale), the rotations
-//! of [`FITTED_JOINTS`] and the shape coefficients (kept within their ranges). Residuals: each
-//! keypoint's reprojection error in pixels, weighted by √confidence; the priors pull joint
-//! rotations to rest at [`PRIOR_PX_PER_RAD`] pixels per radian, so joints no keypoint
-//! constrains (legs out of frame, twist about a bone) stay near rest, and shape to the default
-//! at [`SHAPE_PRIOR_PX`] per unit. Expression is not fitted (no face keypoints yet).
+//! Two stages. **Body:** the global orientation (root axis-angle), the camera translation
+//! (GUAVA's camera: `invtanfov` 24, looking at the body's front, so its distance sets the scale),
+//! the rotations of [`FITTED_JOINTS`] and the shape coefficients (kept within their ranges),
+//! against the pose model's body keypoints. **Face**, when the face model found a face: the head
+//! and neck rotations and the [`FITTED_EXPRESSIONS`] (within their ranges; the default body's
+//! expressions are the 52 ARKit face units, jaw opening included), against the face mesh's points on the body
+//! ([`FaceEmbedding`]) with the body keypoints kept in. Residuals are reprojection errors in
+//! pixels, weighted by √confidence; priors pull joints to rest at [`PRIOR_PX_PER_RAD`] pixels per
+//! radian, shape to the default at [`SHAPE_PRIOR_PX`] and expressions to neutral at
+//! [`EXPRESSION_PRIOR_PER_EYE_SPAN`] per unit, so what no keypoint constrains stays
+//! put.
+
+mod face;
+mod lm;
+
+pub use face::{FACE_FEATURES, FACE_FIT_POINTS, FaceEmbedding, embed_face};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use crate::body::{BodyModel, BodyPose, PosedBody};
+use crate::body::{BodyModel, BodyPose, Landmark, PointPoser, TargetGroup};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
-use crate::keypoints::Keypoint;
+use crate::keypoints::{Detections, FACE_EYE_CORNERS, FaceLandmarker, FaceLandmarks, Keypoint};
 use crate::reconstruct::SourceView;
 
-/// The joints the fit turns (besides the root).
+/// The joints the body stage turns (besides the root).
 pub const FITTED_JOINTS: [&str; 11] = [
     "spine03",
     "neck01",
@@ -30,14 +39,60 @@ pub const FITTED_JOINTS: [&str; 11] = [
     "lowerleg01.L",
     "lowerleg01.R",
 ];
+/// The face units the face stage fits: those 2D face points tell apart. The other ARKit units
+/// (stretch, press, dimple, roll, shrug, jaw sideways, gaze…) mostly re-describe the same point
+/// motions and, on a real face, soak up how the person's face differs from the default body's;
+/// they stay neutral.
+pub const FITTED_EXPRESSIONS: [&str; 14] = [
+    "jawOpen",
+    "mouthSmileLeft",
+    "mouthSmileRight",
+    "mouthFrownLeft",
+    "mouthFrownRight",
+    "mouthFunnel",
+    "mouthPucker",
+    "eyeBlinkLeft",
+    "eyeBlinkRight",
+    "browInnerUp",
+    "browDownLeft",
+    "browDownRight",
+    "browOuterUpLeft",
+    "browOuterUpRight",
+];
+/// The joints the face stage turns again, with the expression.
+const FACE_JOINTS: [&str; 2] = ["neck01", "head"];
+/// The person's face is not the default body's: the face stage gives it its own size (a scale
+/// of all face points about their centroid) and lets each feature (lips, eyes, brows, nose) sit
+/// a little apart from where the default face has it, so that expressions explain how features
+/// are shaped, not where they are. Priors, per unit of log-scale and per pixel of offset, as
+/// fractions of the eye span and of one point's error.
+const FACE_SCALE_PRIOR_PER_EYE_SPAN: f64 = 0.5;
+const FEATURE_OFFSET_PRIOR: f64 = 0.3;
+/// Units that pull the same points opposite ways: on a real face, whose neutral differs from
+/// the default body's, both can rise together to widen or shift a feature, so they pay for acting
+/// at once (a residual of their product).
+const ANTAGONISTS: [(&str, &str); 4] = [
+    ("mouthSmileLeft", "mouthFrownLeft"),
+    ("mouthSmileRight", "mouthFrownRight"),
+    ("browDownLeft", "browOuterUpLeft"),
+    ("browDownRight", "browOuterUpRight"),
+];
+/// Both antagonists at 1 cost as much as one face point off by this fraction of the eye span.
+const ANTAGONIST_PER_EYE_SPAN: f64 = 1.0;
 /// Prior strength: a joint turned by 1 rad costs as much as a keypoint 25 px off.
 pub const PRIOR_PX_PER_RAD: f64 = 25.0;
 /// Shape prior: a shape coefficient at 1 (a phenotype's end) costs as much as a keypoint 20 px off.
 pub const SHAPE_PRIOR_PX: f64 = 20.0;
+/// Expression prior: a face unit at 1 costs as much as one face point off by this fraction of the
+/// face's outer-eye-corner distance (so it does not depend on how many pixels the face covers).
+/// Weak, because a unit moves a dozen points at once; it keeps units no point sees at neutral.
+pub const EXPRESSION_PRIOR_PER_EYE_SPAN: f64 = 0.03;
 /// The global orientation's prior is weaker: people face the camera at any angle.
 const ROOT_PRIOR_PX_PER_RAD: f64 = 2.0;
 /// Keypoints the model is less sure of are left out.
 pub const MIN_CONFIDENCE: f32 = 0.5;
+/// The face mesh's ~100 points are not independent observations: each counts at this weight.
+const FACE_POINT_WEIGHT: f64 = 0.5;
 const ITERATIONS: usize = 30;
 
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -48,14 +103,39 @@ pub enum FitError {
     TooFewKeypoints { found: usize, names: String },
     #[error("the body has no landmark or joint named {0:?}")]
     MissingOnBody(String),
+    #[error("face model: {0}")]
+    FaceModel(String),
 }
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitReport {
     pub keypoints_used: usize,
     pub iterations: usize,
-    /// Root-mean-square reprojection error of the used keypoints, in pixels.
+    /// Root-mean-square reprojection error of the used body keypoints, in pixels.
     pub rms_px: f32,
+    /// The face stage, when it ran.
+    pub face: Option<FaceFitReport>,
+    /// Why the face stage did not run, when it did not.
+    pub face_skipped: Option<String>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct FaceFitReport {
+    pub points_used: usize,
+    pub iterations: usize,
+    /// Root-mean-square reprojection error of the face points before and after the face stage
+    /// (after: with the face's own size and feature offsets).
+    pub rms_before_px: f32,
+    pub rms_px: f32,
+    /// The person's face size against the default body's, as the fit found it.
+    pub face_scale: f32,
+    /// Each used face point as the model found it and where the fitted body itself puts it
+    /// (source pixels, without the face's own size and offsets), for showing over the photo.
+    pub observed: Vec<Vec2>,
+    pub fitted: Vec<Vec2>,
+    /// The used points' places on the body (from the [`FaceEmbedding`]), to re-project them
+    /// when the pose is adjusted.
+    pub surface: Vec<Landmark>,
 }
 
 /// The camera looking at the body's front (+z) from +z: x right on the body's left, y down.
@@ -68,72 +148,196 @@ fn camera_for(translation: Vec3, side: u32) -> Camera {
     )
 }
 
-struct Problem<'a> {
-    body: &'a BodyModel,
-    side: u32,
-    /// (landmark index, observed pixel, √confidence)
-    observations: Vec<(usize, Vec2, f64)>,
-    joints: Vec<usize>,
-    /// Shape targets and their ranges.
-    shapes: Vec<(usize, [f32; 2])>,
-    posed: PosedBody,
+/// One scalar the fit moves.
+#[derive(Clone, Copy)]
+enum Unknown {
+    /// The camera translation's component.
+    Camera(usize),
+    /// A joint rotation's axis-angle component.
+    Joint(usize, usize),
+    /// A morph target's coefficient, clamped to its range.
+    Coefficient(usize, [f32; 2]),
+    /// The log of the person's face size against the body's (face stage only).
+    FaceScale,
+    /// A face feature's image offset component (face stage only).
+    FeatureOffset(usize, usize),
 }
 
-impl Problem<'_> {
-    fn view(&self, p: &[f64]) -> SourceView {
-        let mut pose = BodyPose::rest(self.body);
-        let v = |i: usize| Vec3::new(p[i] as f32, p[i + 1] as f32, p[i + 2] as f32);
-        pose.rotations[0] = v(0);
-        for (k, &j) in self.joints.iter().enumerate() {
-            pose.rotations[j] = v(6 + 3 * k);
+/// A pose and camera as the fit holds them, with the face's own size and feature offsets.
+#[derive(Clone)]
+struct State {
+    pose: BodyPose,
+    camera: Vec3,
+    face_scale: f32,
+    feature_offsets: [Vec2; FACE_FEATURES.len()],
+}
+
+impl State {
+    fn get(&self, u: Unknown) -> f64 {
+        match u {
+            Unknown::Camera(k) => self.camera[k] as f64,
+            Unknown::Joint(j, k) => self.pose.rotations[j][k] as f64,
+            Unknown::Coefficient(t, _) => self.pose.coefficients[t] as f64,
+            Unknown::FaceScale => self.face_scale as f64,
+            Unknown::FeatureOffset(g, k) => self.feature_offsets[g][k] as f64,
         }
-        let first_shape = 6 + 3 * self.joints.len();
-        for (k, &(t, [lo, hi])) in self.shapes.iter().enumerate() {
-            pose.coefficients[t] = (p[first_shape + k] as f32).clamp(lo, hi);
+    }
+
+    fn set(&mut self, u: Unknown, value: f64) {
+        let v = value as f32;
+        match u {
+            Unknown::Camera(k) => self.camera[k] = v,
+            Unknown::Joint(j, k) => self.pose.rotations[j][k] = v,
+            Unknown::Coefficient(t, [lo, hi]) => self.pose.coefficients[t] = v.clamp(lo, hi),
+            Unknown::FaceScale => self.face_scale = v,
+            Unknown::FeatureOffset(g, k) => self.feature_offsets[g][k] = v,
         }
-        SourceView {
-            pose,
-            camera: camera_for(v(3), self.side),
+    }
+}
+
+/// What one stage minimises: observed pixels of posed points, and priors on its unknowns.
+struct Stage<'a> {
+    body: &'a BodyModel,
+    side: u32,
+    poser: &'a mut PointPoser,
+    /// (point index in the poser, observed pixel, weight); points not observed are skipped.
+    observations: Vec<(usize, Vec2, f64)>,
+    /// Per observation: whether it is a face point, and the feature it belongs to.
+    face_points: Vec<(bool, Option<usize>)>,
+    projected: Vec<Vec2>,
+    /// Each unknown with its prior weight (pixels per unit away from zero).
+    unknowns: Vec<(Unknown, f64)>,
+    /// Pairs of morph targets that pay `weight · a · b` for acting together.
+    antagonists: Vec<(usize, usize, f64)>,
+    base: State,
+    points: Vec<Vec3>,
+    joints: Vec<Vec3>,
+}
+
+impl Stage<'_> {
+    fn state(&self, p: &[f64]) -> State {
+        let mut s = self.base.clone();
+        for (&(u, _), &v) in self.unknowns.iter().zip(p) {
+            s.set(u, v);
         }
+        s
     }
 
     fn residuals(&mut self, p: &[f64], out: &mut Vec<f64>) {
         out.clear();
-        let view = self.view(p);
-        if self.body.pose(&view.pose, &mut self.posed).is_err() {
-            out.resize(self.len(), 1e6);
-            return;
+        let s = self.state(p);
+        let posed = self
+            .poser
+            .pose(self.body, &s.pose, &mut self.points, &mut self.joints);
+        let camera = camera_for(s.camera, self.side);
+        let mut ok = posed.is_ok();
+        self.projected.clear();
+        for &(i, _, _) in &self.observations {
+            let q = camera.project(self.points[i]);
+            ok &= q.z > 0.0 && q.is_finite();
+            self.projected.push(Vec2::new(q.x, q.y));
         }
-        for &(l, observed, w) in &self.observations {
-            let lm = &self.body.landmarks[l];
-            let x: Vec3 = lm
-                .vertices
-                .iter()
-                .zip(&lm.weights)
-                .map(|(&v, &wt)| wt * self.posed.vertices[v as usize])
-                .sum();
-            let q = view.camera.project(x);
-            let ok = q.z > 0.0 && q.is_finite();
+        // The face's own size and feature offsets, about the face points' centroid.
+        let face: Vec<Vec2> = (self.projected.iter().zip(&self.face_points))
+            .filter_map(|(q, f)| f.0.then_some(*q))
+            .collect();
+        let centre = face.iter().sum::<Vec2>() / face.len().max(1) as f32;
+        let scale = s.face_scale.exp();
+        for (q, &(is_face, feature)) in self.projected.iter_mut().zip(&self.face_points) {
+            if is_face {
+                *q = centre
+                    + scale * (*q - centre)
+                    + feature.map_or(Vec2::ZERO, |g| s.feature_offsets[g]);
+            }
+        }
+        for (q, &(_, observed, w)) in self.projected.iter().zip(&self.observations) {
             for (a, b) in [(q.x, observed.x), (q.y, observed.y)] {
                 out.push(if ok { w * (a - b) as f64 } else { 1e4 });
             }
         }
-        let first_shape = 6 + 3 * self.joints.len();
-        out.extend(p[..3].iter().map(|x| ROOT_PRIOR_PX_PER_RAD * x));
-        out.extend(p[6..first_shape].iter().map(|x| PRIOR_PX_PER_RAD * x));
-        out.extend(p[first_shape..].iter().map(|x| SHAPE_PRIOR_PX * x));
+        out.extend(self.unknowns.iter().zip(p).map(|(&(_, w), &v)| w * v));
+        let c = &s.pose.coefficients;
+        out.extend(
+            self.antagonists
+                .iter()
+                .map(|&(a, b, w)| w * (c[a] * c[b]) as f64),
+        );
     }
 
-    fn len(&self) -> usize {
-        2 * self.observations.len() + 3 + 3 * self.joints.len() + self.shapes.len()
+    fn solve(&mut self, camera_step: f64) -> (State, usize) {
+        let p0: Vec<f64> = self
+            .unknowns
+            .iter()
+            .map(|&(u, _)| self.base.get(u))
+            .collect();
+        let steps: Vec<f64> = self
+            .unknowns
+            .iter()
+            .map(|(u, _)| match u {
+                Unknown::Camera(_) => camera_step,
+                Unknown::FeatureOffset(..) => 1e-2,
+                _ => 1e-4,
+            })
+            .collect();
+        let solution = lm::minimise(p0, &steps, ITERATIONS, |p, r| self.residuals(p, r));
+        (self.state(&solution.params), solution.iterations)
+    }
+
+    /// Where `state` puts the observed points of `range`, in pixels (face points with the
+    /// face's own size and feature offsets).
+    fn projected(&mut self, state: &State, range: std::ops::Range<usize>) -> Vec<Vec2> {
+        let saved = std::mem::replace(&mut self.base, state.clone());
+        let mut r = Vec::new();
+        self.residuals(&[], &mut r);
+        self.base = saved;
+        self.projected[range].to_vec()
+    }
+
+    /// Unweighted RMS pixel error of the observations in `state`.
+    fn rms(&mut self, state: &State, range: std::ops::Range<usize>) -> f32 {
+        let n = range.len().max(1) as f32;
+        let se: f32 = self
+            .projected(state, range.clone())
+            .iter()
+            .zip(&self.observations[range])
+            .map(|(p, o)| p.distance_squared(o.1))
+            .sum();
+        (se / n).sqrt()
     }
 }
 
-/// Fits the default body to `keypoints` in a `side`² image (GUAVA's camera) and returns the
-/// source view (pose and camera) for reconstruction.
+/// Fits the body to what the keypoint models found on a photo: body keypoints, and the face mesh
+/// when there is one (placed on the body by [`embed_face`] with `face_model`). A face that cannot
+/// be used leaves the fit to the body keypoints and says why in [`FitReport::face_skipped`].
+pub fn fit_detections(
+    body: &BodyModel,
+    detections: &Detections,
+    face_model: &mut FaceLandmarker,
+    side: u32,
+) -> Result<(SourceView, FitReport), FitError> {
+    let embedding = detections
+        .face
+        .as_ref()
+        .ok_or_else(|| {
+            "the face model found no face (or the pose model saw no eyes and nose)".to_string()
+        })
+        .and_then(|_| embed_face(body, face_model).map_err(|e| e.to_string()));
+    let face = match (&detections.face, &embedding) {
+        (Some(f), Ok(e)) => Some((f, e)),
+        _ => None,
+    };
+    let (view, mut report) = fit_keypoints(body, &detections.pose.keypoints, face, side)?;
+    report.face_skipped = embedding.err();
+    Ok((view, report))
+}
+
+/// Fits the default body to a photo's body `keypoints` (and its face mesh, with the body's
+/// embedding of it, when given) in a `side`² image seen by GUAVA's camera; returns the source
+/// view (pose and camera) for reconstruction.
 pub fn fit_keypoints(
     body: &BodyModel,
     keypoints: &[Keypoint],
+    face: Option<(&FaceLandmarks, &FaceEmbedding)>,
     side: u32,
 ) -> Result<(SourceView, FitReport), FitError> {
     let landmark = |name: &str| body.landmarks.iter().position(|l| l.name == name);
@@ -151,13 +355,10 @@ pub fn fit_keypoints(
             names: names.join(", "),
         });
     }
-    let joints = FITTED_JOINTS
-        .iter()
-        .map(|n| {
-            body.joint_index(n)
-                .ok_or_else(|| FitError::MissingOnBody((*n).into()))
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let joint = |n: &str| {
+        body.joint_index(n)
+            .ok_or_else(|| FitError::MissingOnBody(n.into()))
+    };
 
     // Start: rest pose, the camera placing the shoulders' midpoint and width where observed.
     let rest = body.landmark_positions(&body.vertices);
@@ -172,137 +373,134 @@ pub fn fit_keypoints(
     let focal = GUAVA_INVTANFOV * side as f32 / 2.0;
     let depth = focal * w3 / w2.max(1.0);
     let centre = side as f32 / 2.0;
-    let t = Vec3::new(
-        (m2.x - centre) * depth / focal - m3.x,
-        (m2.y - centre) * depth / focal + m3.y,
-        depth + m3.z,
-    );
-    let shapes: Vec<(usize, [f32; 2])> = body
-        .targets_in(crate::body::TargetGroup::Shape)
-        .map(|(i, t)| (i, t.range))
-        .collect();
-    let n = 6 + 3 * joints.len() + shapes.len();
-    let mut p = vec![0.0f64; n];
-    p[3..6].copy_from_slice(&[t.x as f64, t.y as f64, t.z as f64]);
+    let start = State {
+        face_scale: 0.0,
+        feature_offsets: [Vec2::ZERO; FACE_FEATURES.len()],
+        pose: BodyPose::rest(body),
+        camera: Vec3::new(
+            (m2.x - centre) * depth / focal - m3.x,
+            (m2.y - centre) * depth / focal + m3.y,
+            depth + m3.z,
+        ),
+    };
+    let camera_step = 1e-4 * depth as f64;
 
-    let mut problem = Problem {
+    // The body's landmarks first, then the face points, all posed by one poser.
+    let face_points: &[Landmark] = face.map_or(&[], |(_, e)| &e.points);
+    let mut poser = PointPoser::new(body, body.landmarks.iter().chain(face_points));
+
+    let mut unknowns: Vec<(Unknown, f64)> = (0..3)
+        .map(|k| (Unknown::Joint(0, k), ROOT_PRIOR_PX_PER_RAD))
+        .chain((0..3).map(|k| (Unknown::Camera(k), 0.0)))
+        .collect();
+    for name in FITTED_JOINTS {
+        let j = joint(name)?;
+        unknowns.extend((0..3).map(|k| (Unknown::Joint(j, k), PRIOR_PX_PER_RAD)));
+    }
+    unknowns.extend(
+        body.targets_in(TargetGroup::Shape)
+            .map(|(i, t)| (Unknown::Coefficient(i, t.range), SHAPE_PRIOR_PX)),
+    );
+    let body_observed = observations.len();
+    let mut stage = Stage {
         body,
         side,
+        poser: &mut poser,
         observations,
-        joints,
-        shapes,
-        posed: PosedBody::default(),
+        unknowns,
+        antagonists: Vec::new(),
+        face_points: vec![(false, None); body_observed],
+        projected: Vec::new(),
+        base: start,
+        points: Vec::new(),
+        joints: Vec::new(),
     };
-    let (mut r, mut r_step) = (Vec::new(), Vec::new());
-    problem.residuals(&p, &mut r);
-    let mut cost: f64 = r.iter().map(|x| x * x).sum();
-    let mut mu = 1e-3;
-    let mut jac = vec![0.0f64; r.len() * n];
-    let mut iterations = 0;
-    for _ in 0..ITERATIONS {
-        iterations += 1;
-        // Forward-difference Jacobian, column by column.
-        for c in 0..n {
-            let h = if (3..6).contains(&c) {
-                1e-3 * depth as f64 / 10.0
-            } else {
-                1e-4
-            };
-            let mut q = p.clone();
-            q[c] += h;
-            problem.residuals(&q, &mut r_step);
-            for (row, (a, b)) in r_step.iter().zip(&r).enumerate() {
-                jac[row * n + c] = (a - b) / h;
-            }
+    let (mut result, mut iterations) = stage.solve(camera_step);
+
+    let mut face_report = None;
+    if let Some((landmarks, embedding)) = face {
+        let first = body.landmarks.len();
+        stage.observations.extend(
+            FACE_FIT_POINTS
+                .iter()
+                .enumerate()
+                .take(embedding.points.len())
+                .map(|(k, &i)| (first + k, landmarks.points[i], FACE_POINT_WEIGHT)),
+        );
+        stage.face_points.extend(
+            (0..embedding.points.len())
+                .map(|k| (true, FACE_FEATURES.iter().position(|(_, r)| r.contains(&k)))),
+        );
+        let mut unknowns = Vec::new();
+        for name in FACE_JOINTS {
+            let j = joint(name)?;
+            unknowns.extend((0..3).map(|k| (Unknown::Joint(j, k), PRIOR_PX_PER_RAD)));
         }
-        let (jtj, jtr) = normal_equations(&jac, &r, n);
-        let mut improved = false;
-        for _ in 0..10 {
-            let mut a = jtj.clone();
-            for i in 0..n {
-                a[i * n + i] += mu * jtj[i * n + i].max(1e-9);
-            }
-            let Some(delta) = solve(a, jtr.iter().map(|x| -x).collect(), n) else {
-                mu *= 10.0;
-                continue;
-            };
-            let q: Vec<f64> = p.iter().zip(&delta).map(|(a, d)| a + d).collect();
-            problem.residuals(&q, &mut r_step);
-            let new_cost: f64 = r_step.iter().map(|x| x * x).sum();
-            if new_cost < cost {
-                let gain = (cost - new_cost) / cost.max(1e-12);
-                p = q;
-                std::mem::swap(&mut r, &mut r_step);
-                cost = new_cost;
-                mu = (mu / 3.0).max(1e-9);
-                improved = gain > 1e-7;
-                break;
-            }
-            mu *= 4.0;
+        let eye_span =
+            landmarks.points[FACE_EYE_CORNERS.0].distance(landmarks.points[FACE_EYE_CORNERS.1]);
+        let expression_prior = EXPRESSION_PRIOR_PER_EYE_SPAN * eye_span as f64;
+        // A body without one of these units (not ARKit-named) simply does not fit it.
+        unknowns.extend(
+            FITTED_EXPRESSIONS
+                .iter()
+                .filter_map(|n| body.target_index(n))
+                .map(|i| {
+                    (
+                        Unknown::Coefficient(i, body.targets[i].range),
+                        expression_prior,
+                    )
+                }),
+        );
+        unknowns.push((
+            Unknown::FaceScale,
+            FACE_SCALE_PRIOR_PER_EYE_SPAN * eye_span as f64,
+        ));
+        for g in 0..FACE_FEATURES.len() {
+            unknowns.extend((0..2).map(|k| (Unknown::FeatureOffset(g, k), FEATURE_OFFSET_PRIOR)));
         }
-        if !improved {
-            break;
-        }
+        stage.unknowns = unknowns;
+        let weight = ANTAGONIST_PER_EYE_SPAN * eye_span as f64;
+        stage.antagonists = ANTAGONISTS
+            .iter()
+            .filter_map(|(a, b)| Some((body.target_index(a)?, body.target_index(b)?, weight)))
+            .collect();
+        stage.base = result.clone();
+        let face_range = body_observed..stage.observations.len();
+        let rms_before_px = stage.rms(&result, face_range.clone());
+        let (with_face, face_iterations) = stage.solve(camera_step);
+        iterations += face_iterations;
+        face_report = Some(FaceFitReport {
+            points_used: face_range.len(),
+            iterations: face_iterations,
+            rms_before_px,
+            rms_px: stage.rms(&with_face, face_range.clone()),
+            observed: stage.observations[face_range.clone()]
+                .iter()
+                .map(|o| o.1)
+                .collect(),
+            fitted: {
+                let mut body_only = with_face.clone();
+                body_only.face_scale = 0.0;
+                body_only.feature_offsets = Default::default();
+                stage.projected(&body_only, face_range)
+            },
+            face_scale: with_face.face_scale.exp(),
+            surface: embedding.points.clone(),
+        });
+        result = with_face;
     }
-    let observed = problem.observations.len();
-    let se: f64 = r[..2 * observed]
-        .chunks_exact(2)
-        .zip(&problem.observations)
-        .map(|(d, o)| (d[0] * d[0] + d[1] * d[1]) / (o.2 * o.2))
-        .sum();
     let report = FitReport {
-        keypoints_used: observed,
+        keypoints_used: body_observed,
         iterations,
-        rms_px: (se / observed as f64).sqrt() as f32,
+        rms_px: stage.rms(&result, 0..body_observed),
+        face: face_report,
+        face_skipped: None,
     };
-    Ok((problem.view(&p), report))
-}
-
-/// JᵀJ and Jᵀr of a row-major `rows × n` Jacobian.
-fn normal_equations(jac: &[f64], r: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut jtj = vec![0.0; n * n];
-    let mut jtr = vec![0.0; n];
-    for (row, &ri) in jac.chunks_exact(n).zip(r) {
-        for i in 0..n {
-            if row[i] == 0.0 {
-                continue;
-            }
-            jtr[i] += row[i] * ri;
-            for j in 0..n {
-                jtj[i * n + j] += row[i] * row[j];
-            }
-        }
-    }
-    (jtj, jtr)
-}
-
-/// Solves the symmetric positive definite system `a·x = b` by Cholesky; `None` if it is not.
-fn solve(mut a: Vec<f64>, mut b: Vec<f64>, n: usize) -> Option<Vec<f64>> {
-    for j in 0..n {
-        let mut d = a[j * n + j];
-        for k in 0..j {
-            d -= a[j * n + k] * a[j * n + k];
-        }
-        if d.is_nan() || d <= 0.0 {
-            return None;
-        }
-        let d = d.sqrt();
-        a[j * n + j] = d;
-        for i in j + 1..n {
-            let mut s = a[i * n + j];
-            for k in 0..j {
-                s -= a[i * n + k] * a[j * n + k];
-            }
-            a[i * n + j] = s / d;
-        }
-    }
-    for i in 0..n {
-        let s: f64 = (0..i).map(|k| a[i * n + k] * b[k]).sum();
-        b[i] = (b[i] - s) / a[i * n + i];
-    }
-    for i in (0..n).rev() {
-        let s: f64 = (i + 1..n).map(|k| a[k * n + i] * b[k]).sum();
-        b[i] = (b[i] - s) / a[i * n + i];
-    }
-    Some(b)
+    Ok((
+        SourceView {
+            pose: result.pose,
+            camera: camera_for(result.camera, side),
+        },
+        report,
+    ))
 }

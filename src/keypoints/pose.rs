@@ -1,5 +1,4 @@
-//! 2D body keypoints and a person mask from MediaPipe's pose landmark model (`pose_landmark_full`,
-//! Apache-2.0, converted to ONNX by `tools/convert_mediapipe.py`) through ONNX Runtime.
+//! 2D body keypoints and a person mask from MediaPipe's pose landmark model (`pose_landmark_full`).
 //!
 //! The model sees the photo's centred square crop at 256² (RGB in [0, 1], NHWC, as MediaPipe
 //! feeds it) and returns 39 landmarks (33 body points and 6 auxiliary) in input pixels with
@@ -11,6 +10,7 @@ use std::path::Path;
 
 use glam::Vec2;
 
+use super::{Keypoint, sigmoid};
 use crate::onnx::{OnnxError, OnnxRuntime, Session, TensorF32};
 use crate::reconstruct::SourceImage;
 use crate::reconstruct::fill::bilinear_clamped;
@@ -45,16 +45,6 @@ pub const COCO_FROM_MEDIAPIPE: [(&str, usize); 17] = [
     ("right_ankle", 28),
 ];
 
-/// One keypoint: a named landmark's image position and how sure the model is that it is visible.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Keypoint {
-    pub name: &'static str,
-    /// Pixel-edge coordinates in an image of side `side` (the size `detect` was asked for).
-    pub pixel: Vec2,
-    /// sigmoid(visibility) · sigmoid(presence), in [0, 1].
-    pub confidence: f32,
-}
-
 #[derive(Clone, Debug, PartialEq)]
 pub struct PoseKeypoints {
     /// The model's pose presence score in [0, 1].
@@ -78,10 +68,6 @@ impl PoseKeypoints {
             })
             .collect()
     }
-}
-
-fn sigmoid(x: f32) -> f32 {
-    1.0 / (1.0 + (-x).exp())
 }
 
 pub struct PoseLandmarker {

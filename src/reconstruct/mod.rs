@@ -21,11 +21,13 @@ use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use crate::avatar::Avatar;
-use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, TargetGroup};
+use crate::body::{BodyModel, BodyPose, Posable, PoseError, PosedBody, TargetGroup};
 use crate::camera::Camera;
 use crate::fit::FitReport;
-use crate::keypoints::PoseLandmarker;
-use crate::tracking::{Retarget, Tracking, TrackingError, camera_at};
+use crate::keypoints::{Detections, Landmarkers};
+use crate::tracking::{
+    BodyKind, Frame, Retarget, TrackedCamera, Tracking, TrackingError, camera_at,
+};
 pub use default_mode::{DEFAULT_CHANNELS, DiscStyle};
 pub use source::{SOURCE_SIZE, SourceImage};
 pub use uv_map::UvMap;
@@ -111,6 +113,49 @@ pub struct SourceView {
 }
 
 impl SourceView {
+    /// A one-frame tracking file for the default body holding this view exactly (what `guava fit`
+    /// and the viewer's *Save as tracking* write); `source` says where it came from.
+    pub fn to_tracking(&self, body: &BodyModel, source: &str) -> Tracking {
+        let view = self;
+        let expressions: Vec<usize> = body
+            .targets_in(TargetGroup::Expression)
+            .map(|(i, _)| i)
+            .collect();
+        let mut tracking = Tracking::new(
+            BodyKind::Default,
+            30.0,
+            body.joint_names().map(String::from).collect(),
+            expressions
+                .iter()
+                .map(|&i| body.targets[i].name.clone())
+                .collect(),
+        );
+        tracking.source = source.into();
+        for (i, t) in body.targets_in(TargetGroup::Shape) {
+            if view.pose.coefficients[i] != 0.0 {
+                tracking
+                    .identity
+                    .parameters
+                    .insert(t.name.clone(), view.pose.coefficients[i]);
+            }
+        }
+        let w2c: glam::Mat4 = view.camera.view_from_world;
+        let rows = [0, 1, 2].map(|r| w2c.row(r).to_array());
+        tracking.frames.push(Frame {
+            translation: view.pose.translation.to_array(),
+            rotations: view.pose.rotations.iter().map(|r| r.to_array()).collect(),
+            values: expressions
+                .iter()
+                .map(|&i| view.pose.coefficients[i])
+                .collect(),
+            camera: Some(TrackedCamera {
+                w2c: rows,
+                invtanfov: view.camera.invtanfov(),
+            }),
+        });
+        tracking
+    }
+
     /// Frame 0 of `tracking`, retargeted onto `body`; the camera is the frame's tracked camera at
     /// the source size. `file` names the tracking file in errors.
     pub fn from_tracking(
@@ -223,8 +268,10 @@ pub fn tracking_beside(photo: &std::path::Path) -> std::path::PathBuf {
 pub enum Tracked<'a> {
     /// A tracking file (frame 0).
     File(&'a std::path::Path),
-    /// Fitted here to the pose model's keypoints.
+    /// Fitted here to the keypoint models' points.
     Fit,
+    /// Given as it is (a fit adjusted by hand in the viewer).
+    Given(SourceView),
 }
 
 /// Where the person mask came from.
@@ -241,34 +288,41 @@ pub enum MaskSource {
 
 /// Reads `photo`, gets its pose and camera (from a tracking file or by fitting keypoints), and
 /// runs [`reconstruct_default`] on `body`: what the CLI and the viewer's worker call. A photo
-/// without alpha is masked by the pose model's segmentation when `landmarker` is given (else by
-/// the body's silhouette). Fitting needs `landmarker`. Every error names the file.
+/// without alpha is masked by the pose model's segmentation when `landmarkers` are given (else by
+/// the body's silhouette). Fitting needs `landmarkers`. Every error names the file.
 pub fn reconstruct_photo_file(
     body: &BodyModel,
     uv: &UvMap,
     photo: &std::path::Path,
     tracked: Tracked,
-    landmarker: Option<&mut PoseLandmarker>,
+    mut landmarkers: Option<&mut Landmarkers>,
     progress: &mut dyn FnMut(Stage) -> bool,
 ) -> Result<(Avatar, Report, SourceView), ReconstructError> {
     let mut image = SourceImage::load(photo)?;
     let file = photo.display().to_string();
-    let needs_model = image.mask.is_none() || matches!(tracked, Tracked::Fit);
+    // A given pose runs the pose model too, so the viewer can show its keypoints against the pose.
+    let needs_model = image.mask.is_none() || !matches!(tracked, Tracked::File(_));
     let started = Instant::now();
     let mut keypoints = None;
-    if needs_model && let Some(landmarker) = landmarker {
+    if needs_model && let Some(models) = landmarkers.as_deref_mut() {
         if !progress(Stage::Fit) {
             return Err(ReconstructError::Cancelled);
         }
-        let found = landmarker
-            .detect(&image)
-            .map_err(|e| ReconstructError::Keypoints(e.to_string()))?;
-        keypoints = Some(found);
+        let found = if matches!(tracked, Tracked::Fit) {
+            models.detect(&image)
+        } else {
+            // Only the mask is needed: the face model would find nothing the tracking lacks.
+            models
+                .pose
+                .detect(&image)
+                .map(|pose| Detections { pose, face: None })
+        };
+        keypoints = Some(found.map_err(|e| ReconstructError::Keypoints(e.to_string()))?);
     }
     let mut mask = MaskSource::Alpha;
     if image.mask.is_none() {
         if let Some(k) = &keypoints {
-            image.apply_mask(k.mask_at(image.size as usize));
+            image.apply_mask(k.pose.mask_at(image.size as usize));
             mask = MaskSource::Segmentation;
         } else {
             mask = MaskSource::Silhouette;
@@ -282,22 +336,24 @@ pub fn reconstruct_photo_file(
                 None,
             )
         }
+        Tracked::Given(view) => (view, None),
         Tracked::Fit => {
             let k = keypoints.as_ref().ok_or_else(|| {
                 ReconstructError::Keypoints(
                     "fitting a photo needs the pose model, which did not load".into(),
                 )
             })?;
-            if k.presence < 0.5 {
+            if k.pose.presence < 0.5 {
                 return Err(ReconstructError::Image {
                     file,
                     problem: format!(
                         "the pose model finds no person (presence {:.2}); give the photo's tracking file",
-                        k.presence
+                        k.pose.presence
                     ),
                 });
             }
-            let (view, report) = crate::fit::fit_keypoints(body, &k.keypoints, image.size)
+            let models = landmarkers.expect("the keypoints came from them");
+            let (view, report) = crate::fit::fit_detections(body, k, &mut models.face, image.size)
                 .map_err(|e| ReconstructError::Image {
                     file: file.clone(),
                     problem: e.to_string(),
@@ -315,7 +371,7 @@ pub fn reconstruct_photo_file(
         report.timings.insert(0, (Stage::Fit, fit_time));
     }
     report.fit = fit;
-    report.keypoints = keypoints.map(|k| k.keypoints).unwrap_or_default();
+    report.keypoints = keypoints.map(|k| k.pose.keypoints).unwrap_or_default();
     Ok((avatar, report, view))
 }
 

@@ -2,14 +2,13 @@
 //! surface, posed and drawn from a known camera, with its exact tracking. Reconstruction tests
 //! and `guava synth-photo` use them; they are labelled synthetic wherever they appear.
 
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 use image::{Rgba, RgbaImage};
 
+use super::SOURCE_SIZE;
 use super::raster::rasterize;
-use super::{SOURCE_SIZE, SourceView};
-use crate::body::{BodyModel, BodyPose, Posable, PoseError, PosedBody, TargetGroup};
+use crate::body::{BodyModel, BodyPose, PoseError, PosedBody};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
-use crate::tracking::{BodyKind, Frame, TrackedCamera, Tracking};
 
 /// A smooth colour pattern over the rest surface: bands with periods of 0.6–1 m, so a 512²
 /// texture resolves it and an exact reconstruction can match it closely.
@@ -61,45 +60,4 @@ pub fn photo(
         let [r, g, bl] = colour(rest);
         Rgba([q(r), q(g), q(bl), 255])
     }))
-}
-
-/// A one-frame tracking file for the default body holding `view` exactly.
-pub fn tracking_of(body: &BodyModel, view: &SourceView, source: &str) -> Tracking {
-    let expressions: Vec<usize> = body
-        .targets_in(TargetGroup::Expression)
-        .map(|(i, _)| i)
-        .collect();
-    let mut tracking = Tracking::new(
-        BodyKind::Default,
-        30.0,
-        body.joint_names().map(String::from).collect(),
-        expressions
-            .iter()
-            .map(|&i| body.targets[i].name.clone())
-            .collect(),
-    );
-    tracking.source = source.into();
-    for (i, t) in body.targets_in(TargetGroup::Shape) {
-        if view.pose.coefficients[i] != 0.0 {
-            tracking
-                .identity
-                .parameters
-                .insert(t.name.clone(), view.pose.coefficients[i]);
-        }
-    }
-    let w2c: Mat4 = view.camera.view_from_world;
-    let rows = [0, 1, 2].map(|r| w2c.row(r).to_array());
-    tracking.frames.push(Frame {
-        translation: view.pose.translation.to_array(),
-        rotations: view.pose.rotations.iter().map(|r| r.to_array()).collect(),
-        values: expressions
-            .iter()
-            .map(|&i| view.pose.coefficients[i])
-            .collect(),
-        camera: Some(TrackedCamera {
-            w2c: rows,
-            invtanfov: view.camera.invtanfov(),
-        }),
-    });
-    tracking
 }

@@ -1,7 +1,7 @@
 //! The viewer window: menu, scene panel with camera and render controls and the HUD, status bar,
 //! drag-and-drop, and the viewport. Loading runs on a worker thread with progress and Cancel.
 
-use crate::avatar_view::{AvatarState, SourcePreview};
+use crate::avatar_view::{AvatarState, FitAction, SourcePreview};
 use crate::body_panel::BodyState;
 use crate::motion::Motion;
 use crate::orbit::OrbitCamera;
@@ -75,7 +75,7 @@ enum Loaded {
     Avatar(
         Box<Avatar>,
         Option<guava::reconstruct::Report>,
-        Option<SourcePreview>,
+        Option<Box<SourcePreview>>,
         Option<(glam::Mat4, f32)>,
     ),
 }
@@ -358,6 +358,7 @@ impl GuavaApp {
             Avatar,
             Photo(Option<PathBuf>, Arc<BodyModel>),
         }
+        use guava::reconstruct::Tracked;
         let kind = match ext.as_deref() {
             Some("ply") => Kind::Cloud,
             Some("glb") => Kind::Body,
@@ -381,22 +382,20 @@ impl GuavaApp {
                 return;
             }
         };
-        let (tx, rx) = std::sync::mpsc::channel();
         let worker_path = path.clone();
-        let stage = Arc::new(Mutex::new("reading"));
-        let cancel = Arc::new(AtomicBool::new(false));
-        let (worker_stage, worker_cancel) = (stage.clone(), cancel.clone());
-        std::thread::spawn(move || {
-            let result = match kind {
+        self.spawn_job(
+            path,
+            "reading",
+            move |worker_stage, worker_cancel| match kind {
                 Kind::Avatar => Avatar::load(&worker_path)
                     .map(|a| Loaded::Avatar(Box::new(a), None, None, None))
                     .map_err(|e| e.to_string()),
                 Kind::Photo(tracking, body) => reconstruct_worker(
                     &body,
                     &worker_path,
-                    tracking.as_deref(),
-                    &worker_stage,
-                    &worker_cancel,
+                    tracking.as_deref().map_or(Tracked::Fit, Tracked::File),
+                    worker_stage,
+                    worker_cancel,
                 ),
                 Kind::Body => BodyModel::load(&worker_path)
                     .map(Loaded::Body)
@@ -407,9 +406,25 @@ impl GuavaApp {
                 Kind::Motion => open_motion(&worker_path)
                     .map(Loaded::Motion)
                     .map_err(|e| e.to_string()),
-            };
+            },
+        );
+    }
+
+    /// Runs `job` on a worker thread, showing its stage with a Cancel button; what it loads is
+    /// taken in by [`Self::poll_loading`].
+    fn spawn_job(
+        &mut self,
+        path: PathBuf,
+        first_stage: &'static str,
+        job: impl FnOnce(&Mutex<&'static str>, &AtomicBool) -> Result<Loaded, String> + Send + 'static,
+    ) {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let stage = Arc::new(Mutex::new(first_stage));
+        let cancel = Arc::new(AtomicBool::new(false));
+        let (worker_stage, worker_cancel) = (stage.clone(), cancel.clone());
+        std::thread::spawn(move || {
             // The receiver is gone if the user cancelled: nothing to do then.
-            let _ = tx.send(result);
+            let _ = tx.send(job(&worker_stage, &worker_cancel));
         });
         self.loading = Some(Loading {
             path,
@@ -417,6 +432,19 @@ impl GuavaApp {
             rx,
             stage,
             cancel,
+        });
+    }
+
+    /// Reconstructs the avatar's source photo again with `view` (the fit adjusted by hand).
+    pub fn reconstruct_with_pose(&mut self, photo: PathBuf, view: guava::reconstruct::SourceView) {
+        let Some(body) = &self.body else {
+            return self.error("no body to reconstruct on".into());
+        };
+        let model = body.model.clone();
+        let worker_photo = photo.clone();
+        self.spawn_job(photo, "reading", move |stage, cancel| {
+            let given = guava::reconstruct::Tracked::Given(view);
+            reconstruct_worker(&model, &worker_photo, given, stage, cancel)
         });
     }
 
@@ -432,12 +460,10 @@ impl GuavaApp {
             pose: guava::body::BodyPose::rest(model.as_ref()),
             camera: synthetic::upper_body_camera(&model, 0.35),
         };
-        let (tx, rx) = std::sync::mpsc::channel();
-        let stage = Arc::new(Mutex::new("drawing the synthetic photo"));
-        let cancel = Arc::new(AtomicBool::new(false));
-        let (worker_stage, worker_cancel) = (stage.clone(), cancel.clone());
-        std::thread::spawn(move || {
-            let run = || -> Result<Loaded, String> {
+        self.spawn_job(
+            SYNTHETIC_PHOTO.into(),
+            "drawing the synthetic photo",
+            move |stage, cancel| {
                 let image =
                     synthetic::photo(&model, &view.pose, &view.camera, synthetic::banded_texture)
                         .map_err(|e| e.to_string())?;
@@ -454,23 +480,15 @@ impl GuavaApp {
                     &view,
                     source,
                     SYNTHETIC_PHOTO,
-                    &mut progress(&worker_stage, &worker_cancel),
+                    &mut progress(stage, cancel),
                 )
                 .map(|(a, r)| {
                     let camera = (view.camera.view_from_world, view.camera.invtanfov());
                     Loaded::Avatar(Box::new(a), Some(r), None, Some(camera))
                 })
                 .map_err(|e| e.to_string())
-            };
-            let _ = tx.send(run());
-        });
-        self.loading = Some(Loading {
-            path: SYNTHETIC_PHOTO.into(),
-            started: Instant::now(),
-            rx,
-            stage,
-            cancel,
-        });
+            },
+        );
     }
 
     /// Shows an avatar if it fits the current body; otherwise keeps what is shown.
@@ -497,6 +515,14 @@ impl GuavaApp {
                     "; pose and camera fitted to {} keypoints ({:.1} px RMS)",
                     f.keypoints_used, f.rms_px
                 ));
+                match (&f.face, &f.face_skipped) {
+                    (Some(face), _) => label.push_str(&format!(
+                        ", expression to {} face points ({:.1} px RMS)",
+                        face.points_used, face.rms_px
+                    )),
+                    (None, Some(why)) => label.push_str(&format!(", face not fitted ({why})")),
+                    (None, None) => {}
+                }
             }
             label.push_str(&format!(
                 "; {} of {} texels seen, {} mirrored, rest inpainted; {ms:.0} ms",
@@ -518,6 +544,69 @@ impl GuavaApp {
         self.camera_mode = CameraMode::Orbit;
         self.view = View::Avatar;
         self.reset_camera();
+    }
+
+    /// Whether the body sliders are posing the source photo's body (the fit edited by hand).
+    pub fn editing_fit(&self) -> bool {
+        self.avatar
+            .as_ref()
+            .and_then(|a| a.source.as_ref())
+            .is_some_and(SourcePreview::editing)
+    }
+
+    /// Adjusting the source photo's fit by hand: start (the body takes the fit's pose, playback
+    /// pauses, the view looks through the photo's camera), stop, reconstruct with the body's
+    /// current pose, or save it as a tracking file.
+    pub fn fit_action(&mut self, action: FitAction) {
+        let (Some(avatar), Some(body)) = (&mut self.avatar, &mut self.body) else {
+            return;
+        };
+        let Some(source) = &mut avatar.source else {
+            return;
+        };
+        let view = guava::reconstruct::SourceView {
+            pose: body.pose.clone(),
+            camera: source.view.camera,
+        };
+        match action {
+            FitAction::StartEditing => {
+                source.set_editing(true, body);
+                if let Some(motion) = &mut self.motion {
+                    motion.player.playing = false;
+                }
+                self.camera_mode = CameraMode::Source;
+            }
+            FitAction::StopEditing => source.set_editing(false, body),
+            FitAction::Reconstruct => {
+                let photo = source.photo.clone();
+                self.reconstruct_with_pose(photo, view);
+            }
+            FitAction::SaveTracking => {
+                let photo = source.photo.clone();
+                let name = file_name(&photo);
+                let tracking = view.to_tracking(
+                    &body.model,
+                    &format!("fitted in guava-viewer to {name}, adjusted by hand; default body"),
+                );
+                let Some(path) = rfd::FileDialog::new()
+                    .add_filter("tracking", &["json"])
+                    .set_file_name(
+                        guava::reconstruct::tracking_beside(Path::new(&name))
+                            .display()
+                            .to_string(),
+                    )
+                    .save_file()
+                else {
+                    return;
+                };
+                match tracking.save(&path) {
+                    Ok(()) => {
+                        self.status = Some((format!("saved the fit as {}", path.display()), false))
+                    }
+                    Err(e) => self.error(format!("{}: {e}", path.display())),
+                }
+            }
+        }
     }
 
     fn save_avatar_dialog(&mut self) {
@@ -563,7 +652,7 @@ impl GuavaApp {
                         self.set_motion(label, imported);
                     }
                     Ok(Loaded::Avatar(avatar, report, preview, camera)) => {
-                        self.accept_avatar(&path, *avatar, report, preview, camera)
+                        self.accept_avatar(&path, *avatar, report, preview.map(|p| *p), camera)
                     }
                     Err(e) => self.error(e),
                 }
@@ -699,12 +788,16 @@ impl GuavaApp {
                 a.uv.local.len(),
                 a.channels
             ));
-            if let Some(source) = &mut avatar.source {
+            let mut action = None;
+            if let (Some(source), Some(body)) = (&mut avatar.source, &mut self.body) {
                 egui::CollapsingHeader::new("Source photo and fit")
                     .default_open(true)
-                    .show(ui, |ui| source.ui(ui));
+                    .show(ui, |ui| action = source.ui(ui, body));
             }
             ui.separator();
+            if let Some(action) = action {
+                self.fit_action(action);
+            }
         }
         if matches!(self.view, View::Body | View::Avatar) {
             ui.heading("Body");
@@ -1024,32 +1117,32 @@ fn progress<'a>(
 fn reconstruct_worker(
     body: &BodyModel,
     photo: &Path,
-    tracking: Option<&Path>,
+    tracked: guava::reconstruct::Tracked,
     stage: &Mutex<&'static str>,
     cancel: &AtomicBool,
 ) -> Result<Loaded, String> {
     use guava::reconstruct::{DEFAULT_UV_SIZE, Tracked, UvMap, reconstruct_photo_file};
-    *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the pose model";
-    // The pose model fits photos without tracking and masks photos without alpha.
+    *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the keypoint models";
+    // The pose and face models fit photos without tracking; the pose model masks photos without
+    // alpha.
     let model = guava::onnx::OnnxRuntime::load()
         .map_err(|e| e.to_string())
-        .and_then(|rt| guava::keypoints::PoseLandmarker::load(rt).map_err(|e| e.to_string()));
-    let mut model = match (tracking, model) {
+        .and_then(|rt| guava::keypoints::Landmarkers::load(rt).map_err(|e| e.to_string()));
+    let mut model = match (&tracked, model) {
         (_, Ok(m)) => Some(m),
-        (None, Err(e)) => {
+        (Tracked::Fit, Err(e)) => {
             return Err(format!(
-                "{}: no tracking file beside it, and fitting needs the pose model: {e}",
+                "{}: no tracking file beside it, and fitting needs the keypoint models: {e}",
                 photo.display()
             ));
         }
-        (Some(_), Err(e)) => {
-            log::warn!("pose model unavailable ({e}); masking by the body's silhouette");
+        (_, Err(e)) => {
+            log::warn!("keypoint models unavailable ({e}); masking by the body's silhouette");
             None
         }
     };
     *stage.lock().unwrap_or_else(|e| e.into_inner()) = "building the UV map";
     let uv = UvMap::for_body(body, DEFAULT_UV_SIZE);
-    let tracked = tracking.map_or(Tracked::Fit, Tracked::File);
     let (avatar, report, view) = reconstruct_photo_file(
         body,
         &uv,
@@ -1059,8 +1152,8 @@ fn reconstruct_worker(
         &mut progress(stage, cancel),
     )
     .map_err(|e| e.to_string())?;
-    let preview = SourcePreview::new(body, photo, &report, &view);
     let camera = (view.camera.view_from_world, view.camera.invtanfov());
+    let preview = SourcePreview::new(body, photo, &report, view).map(Box::new);
     Ok(Loaded::Avatar(
         Box::new(avatar),
         Some(report),
@@ -1096,7 +1189,9 @@ impl eframe::App for GuavaApp {
         self.poll_loading();
         self.handle_dropped_files(&ctx);
 
-        if let (Some(motion), Some(body)) = (&mut self.motion, &mut self.body) {
+        // While the fit is edited by hand the body holds the photo's pose, not the motion's.
+        let editing = self.editing_fit();
+        if let (Some(motion), Some(body), false) = (&mut self.motion, &mut self.body, editing) {
             let dt = ctx.input(|i| i.unstable_dt) as f64;
             motion.update(dt, &mut body.pose);
             if motion.is_playing() {

@@ -1,11 +1,12 @@
 //! The avatar being shown: its Gaussians rigged onto the current body pose (sliders or motion),
 //! re-rigged only when the pose changed, as a scene for the splatting viewport.
 
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use glam::Vec2;
 use guava::avatar::{Avatar, Rig};
-use guava::body::{BodyModel, PosedBody};
+use guava::body::{BodyModel, Landmark, PosedBody};
 use guava::gaussians::GaussianCloud;
 use guava::reconstruct::{Report, SourceImage, SourceView};
 
@@ -71,25 +72,53 @@ impl AvatarState {
     }
 }
 
-/// The source photo with the pose model's keypoints and where the fitted (or tracked) body puts
-/// the same landmarks, so the user can judge the fit.
+/// The source photo with the keypoint models' points and where the fitted (or tracked) body puts
+/// the same landmarks, so the user can judge the fit, adjust it by hand with the body sliders and
+/// reconstruct the photo again with the adjusted pose.
 pub struct SourcePreview {
     image: egui::ColorImage,
     texture: Option<egui::TextureHandle>,
-    /// Per keypoint: where the model saw it (pixels of the square crop), its confidence, and the
-    /// source body's landmark projected by the source camera.
-    points: Vec<(Vec2, f32, Vec2)>,
+    /// The photo and the pose and camera its avatar was made with.
+    pub photo: PathBuf,
+    pub view: SourceView,
+    /// Per body keypoint: where the model saw it, its confidence, the body landmark's index.
+    keypoints: Vec<(Vec2, f32, usize)>,
+    /// Face-mesh points the fit used: where the model saw them and their place on the body.
+    face: Vec<(Vec2, Landmark)>,
+    /// Where the shown pose puts the keypoints' landmarks, then the face points (pixels).
+    fitted: Vec<Vec2>,
+    /// While editing: the body pose generation `fitted` was computed for.
+    fitted_for: Option<u64>,
     pub rms_px: Option<f32>,
+    editing: bool,
+}
+
+/// What the user asked of the fit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FitAction {
+    /// The body sliders now pose the photo's body, starting from the fit.
+    StartEditing,
+    StopEditing,
+    /// Reconstruct the photo with the body's current pose and the photo's camera.
+    Reconstruct,
+    /// Write the current pose and the photo's camera as a tracking file.
+    SaveTracking,
+}
+
+fn project(camera: &guava::camera::Camera, vertices: &[glam::Vec3], l: &Landmark) -> Vec2 {
+    let x: glam::Vec3 = l
+        .vertices
+        .iter()
+        .zip(&l.weights)
+        .map(|(&v, &w)| w * vertices[v as usize])
+        .sum();
+    let q = camera.project(x);
+    Vec2::new(q.x, q.y)
 }
 
 impl SourcePreview {
     /// `None` when the pose model did not run (a photo with alpha and tracking).
-    pub fn new(
-        body: &BodyModel,
-        photo: &std::path::Path,
-        report: &Report,
-        view: &SourceView,
-    ) -> Option<Self> {
+    pub fn new(body: &BodyModel, photo: &Path, report: &Report, view: SourceView) -> Option<Self> {
         if report.keypoints.is_empty() {
             return None;
         }
@@ -103,27 +132,63 @@ impl SourcePreview {
                 egui::Color32::from_rgb(q(c[0]), q(c[1]), q(c[2]))
             })
             .collect();
-        let mut posed = PosedBody::default();
-        body.pose(&view.pose, &mut posed).ok()?;
-        let landmarks = body.landmark_positions(&posed.vertices);
-        let points = report
+        let keypoints = report
             .keypoints
             .iter()
             .filter_map(|k| {
                 let l = body.landmarks.iter().position(|l| l.name == k.name)?;
-                let q = view.camera.project(landmarks[l]);
-                Some((k.pixel, k.confidence, Vec2::new(q.x, q.y)))
+                Some((k.pixel, k.confidence, l))
             })
             .collect();
-        Some(Self {
+        let face = report
+            .fit
+            .iter()
+            .filter_map(|f| f.face.as_ref())
+            .flat_map(|f| f.observed.iter().copied().zip(f.surface.iter().cloned()))
+            .collect();
+        let mut preview = Self {
             image: egui::ColorImage::new([size, size], pixels),
             texture: None,
-            points,
+            photo: photo.to_path_buf(),
+            view,
+            keypoints,
+            face,
+            fitted: Vec::new(),
+            fitted_for: None,
             rms_px: report.fit.as_ref().map(|f| f.rms_px),
-        })
+            editing: false,
+        };
+        let mut posed = PosedBody::default();
+        body.pose(&preview.view.pose, &mut posed).ok()?;
+        preview.fitted = preview.project_all(body, &posed.vertices);
+        Some(preview)
     }
 
-    pub fn ui(&mut self, ui: &mut egui::Ui) {
+    pub fn editing(&self) -> bool {
+        self.editing
+    }
+
+    fn project_all(&self, body: &BodyModel, vertices: &[glam::Vec3]) -> Vec<Vec2> {
+        let camera = &self.view.camera;
+        let landmarks = self.keypoints.iter().map(|k| &body.landmarks[k.2]);
+        let face = self.face.iter().map(|f| &f.1);
+        landmarks
+            .chain(face)
+            .map(|l| project(camera, vertices, l))
+            .collect()
+    }
+
+    /// The photo with the points and the fit's controls; while editing, the red points follow
+    /// `body`'s pose.
+    pub fn ui(&mut self, ui: &mut egui::Ui, body: &mut BodyState) -> Option<FitAction> {
+        if self.editing {
+            let model = body.model.clone();
+            let (posed, generation) = body.posed();
+            if self.fitted_for != Some(generation) {
+                self.fitted = self.project_all(&model, &posed.vertices);
+                self.fitted_for = Some(generation);
+            }
+        }
         // Uploaded once; the image is copied only then.
         let texture = self.texture.get_or_insert_with(|| {
             ui.ctx()
@@ -135,23 +200,78 @@ impl SourcePreview {
         let scale = side / self.image.size[0] as f32;
         let to_screen = |p: Vec2| rect.min + egui::vec2(p.x, p.y) * scale;
         let painter = ui.painter_at(rect);
-        for &(seen, confidence, fitted) in &self.points {
+        let (green, red) = (
+            egui::Color32::from_rgb(80, 230, 80),
+            egui::Color32::from_rgb(240, 60, 60),
+        );
+        for (&(seen, confidence, _), &fitted) in self.keypoints.iter().zip(&self.fitted) {
             let (a, b) = (to_screen(seen), to_screen(fitted));
             let used = confidence >= guava::fit::MIN_CONFIDENCE;
             let colour = if used {
-                egui::Color32::from_rgb(80, 230, 80)
+                green
             } else {
                 egui::Color32::from_gray(150)
             };
             painter.line_segment([a, b], egui::Stroke::new(1.0, egui::Color32::YELLOW));
             painter.circle_stroke(a, 3.5, egui::Stroke::new(1.5, colour));
-            painter.circle_filled(b, 2.5, egui::Color32::from_rgb(240, 60, 60));
+            painter.circle_filled(b, 2.5, red);
         }
-        ui.label(match self.rms_px {
-            Some(rms) => format!(
+        let face_fitted = &self.fitted[self.keypoints.len().min(self.fitted.len())..];
+        for (&(seen, _), &fitted) in self.face.iter().zip(face_fitted) {
+            painter.circle_filled(to_screen(seen), 1.2, green);
+            painter.circle_filled(to_screen(fitted), 1.2, red);
+        }
+        ui.label(match (self.editing, self.rms_px) {
+            (true, _) => "editing the fit: the Body sliders pose the photo's body; red follows".into(),
+            (false, Some(rms)) => format!(
                 "green: keypoints used (grey: not confident); red: the fitted body's landmarks; fit {rms:.1} px RMS"
             ),
-            None => "green: keypoints found; red: the tracked body's landmarks".into(),
+            (false, None) => "green: keypoints found; red: the tracked body's landmarks".into(),
         });
+        let mut action = None;
+        ui.horizontal(|ui| {
+            if !self.editing {
+                if ui
+                    .button("Adjust the fit…")
+                    .on_hover_text(
+                        "pose the photo's body with the Body sliders, starting from the fit",
+                    )
+                    .clicked()
+                {
+                    action = Some(FitAction::StartEditing);
+                }
+                return;
+            }
+            if ui
+                .button("Reconstruct with this pose")
+                .on_hover_text("reconstruct the photo again with the body's current pose")
+                .clicked()
+            {
+                action = Some(FitAction::Reconstruct);
+            }
+            if ui.button("Save as tracking…").clicked() {
+                action = Some(FitAction::SaveTracking);
+            }
+            if ui.button("Stop").clicked() {
+                action = Some(FitAction::StopEditing);
+            }
+        });
+        action
+    }
+
+    /// Starts or stops editing; starting puts the fit's pose on `body`.
+    pub fn set_editing(&mut self, editing: bool, body: &mut BodyState) {
+        if editing && !self.editing {
+            body.pose = self.view.pose.clone();
+        }
+        if !editing {
+            // Back to the pose the avatar was made with.
+            let mut posed = PosedBody::default();
+            if body.model.pose(&self.view.pose, &mut posed).is_ok() {
+                self.fitted = self.project_all(&body.model, &posed.vertices);
+            }
+        }
+        self.editing = editing;
+        self.fitted_for = None;
     }
 }

@@ -9,3 +9,4 @@ pub mod orbit;
 pub mod viewport;
 
 pub use app::{CameraMode, GuavaApp, Options, View};
+pub use avatar_view::FitAction;

@@ -2,7 +2,7 @@
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use guava_ui::{CameraMode, GuavaApp, Options, View};
+use guava_ui::{CameraMode, FitAction, GuavaApp, Options, View};
 use std::time::{Duration, Instant};
 
 /// One frame through the whole pipeline: UI logic, then a real render (paint callbacks included).
@@ -296,7 +296,7 @@ fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
         .expect("photo")
         .save(&photo)
         .expect("write photo");
-    synthetic::tracking_of(&body, &view, "test")
+    view.to_tracking(&body, "test")
         .save(&dir.join("person.json"))
         .expect("write tracking");
 
@@ -369,5 +369,37 @@ fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
     });
     let (label, _) = h.state().avatar_info().expect("reconstructed");
     assert!(label.contains("pose and camera fitted to"), "{label}");
+    assert!(
+        label.contains("expression to") && label.contains("face points"),
+        "{label}"
+    );
+
+    // Adjusting the fit by hand: the body takes the fit's pose and the motion stops driving it;
+    // a slider change is what the photo is reconstructed with next.
+    h.state_mut().fit_action(FitAction::StartEditing);
+    assert!(h.state().editing_fit());
+    assert_eq!(h.state().camera_mode(), CameraMode::Source);
+    let body_state = h.state_mut().body_mut().expect("body");
+    let model = body_state.model.clone();
+    let head = model.joint_index("head").expect("head");
+    let fitted_head = body_state.pose.rotations[head];
+    body_state.pose.rotations[head].y += 0.4;
+    frame(&mut h);
+    frame(&mut h);
+    let pose = h.state_mut().body_mut().expect("body").pose.clone();
+    assert_eq!(
+        pose.rotations[head].y,
+        fitted_head.y + 0.4,
+        "the motion left the edited pose alone"
+    );
+    h.state_mut().fit_action(FitAction::Reconstruct);
+    wait_until(&mut h, |app| {
+        app.avatar_info()
+            .is_some_and(|(l, _)| l.contains("portrait.png") && !l.contains("fitted to"))
+    });
+    assert!(
+        !h.state().editing_fit(),
+        "a new reconstruction starts with no edit under way"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

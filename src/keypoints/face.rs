@@ -1,0 +1,112 @@
+//! The 468-point face mesh from MediaPipe's face landmark model (`face_landmark`): a 192² crop
+//! with the eyes level (RGB in [0, 1], NHWC) in; the points in input pixels (x, y, relative
+//! depth) and a face-presence logit out.
+
+use std::path::Path;
+
+use glam::Vec2;
+
+use super::{Roi, sigmoid};
+use crate::onnx::{OnnxError, OnnxRuntime, Session, TensorF32};
+use crate::reconstruct::SourceImage;
+
+pub const FACE_MODEL_PATH: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/assets/models/face_landmark.onnx"
+);
+pub const FACE_INPUT: usize = 192;
+pub const FACE_POINTS: usize = 468;
+/// The outer eye corners (subject's right, subject's left): MediaPipe levels the crop by them.
+pub const FACE_EYE_CORNERS: (usize, usize) = (33, 263);
+/// Below this presence the crop holds no face (MediaPipe's tracking threshold).
+const MIN_PRESENCE: f32 = 0.5;
+
+/// A face mesh found on a photo.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FaceLandmarks {
+    /// The 468 points in the source's pixel-edge coordinates.
+    pub points: Vec<Vec2>,
+    /// sigmoid of the model's face logit on the final crop.
+    pub presence: f32,
+    /// The crop the points came from.
+    pub roi: Roi,
+}
+
+pub struct FaceLandmarker {
+    session: Session,
+}
+
+impl FaceLandmarker {
+    pub fn load(runtime: &OnnxRuntime) -> Result<Self, OnnxError> {
+        Self::load_from(runtime, Path::new(FACE_MODEL_PATH))
+    }
+
+    pub fn load_from(runtime: &OnnxRuntime, path: &Path) -> Result<Self, OnnxError> {
+        let session = runtime.session(path)?;
+        if session.input_names().len() != 1 || session.output_names().len() != 2 {
+            return Err(OnnxError::Model {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "expected MediaPipe's face landmark model (1 input, 2 outputs), found inputs {:?} and outputs {:?}",
+                    session.input_names(),
+                    session.output_names()
+                ),
+            });
+        }
+        Ok(Self { session })
+    }
+
+    /// Runs the model on a 192² RGB input in [0, 1]: the points in input pixels and the
+    /// presence probability.
+    pub fn run(&mut self, input: &[f32]) -> Result<(Vec<[f32; 3]>, f32), OnnxError> {
+        assert_eq!(input.len(), FACE_INPUT * FACE_INPUT * 3, "192² RGB input");
+        let name = self.session.input_names()[0].clone();
+        let tensor = TensorF32 {
+            shape: vec![1, FACE_INPUT, FACE_INPUT, 3],
+            data: input.to_vec(),
+        };
+        let outputs = self.session.run(vec![(&name, tensor)])?;
+        let find = |len: usize| outputs.iter().find(|o| o.data.len() == len);
+        let bad = |what: &str| OnnxError::Run {
+            path: self.session.path.clone(),
+            reason: format!("the model gave no {what} output"),
+        };
+        let points = find(FACE_POINTS * 3).ok_or_else(|| bad("landmark"))?;
+        let logit = find(1).ok_or_else(|| bad("face flag"))?.data[0];
+        let points = points
+            .data
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        Ok((points, sigmoid(logit)))
+    }
+
+    /// The face mesh in `roi` of the source, refined once by re-cropping around the first
+    /// answer (as MediaPipe's tracking does between frames); `None` if no face is there.
+    pub fn detect(
+        &mut self,
+        source: &SourceImage,
+        roi: Roi,
+    ) -> Result<Option<FaceLandmarks>, OnnxError> {
+        let mut roi = roi;
+        let mut found = None;
+        for _ in 0..2 {
+            let (points, presence) = self.run(&roi.sample(source, FACE_INPUT))?;
+            if presence < MIN_PRESENCE {
+                return Ok(None);
+            }
+            let points: Vec<Vec2> = points
+                .iter()
+                .map(|p| roi.to_image(Vec2::new(p[0], p[1]), FACE_INPUT))
+                .collect();
+            let next = Roi::face_from_landmarks(&points);
+            found = Some(FaceLandmarks {
+                points,
+                presence,
+                roi,
+            });
+            roi = next;
+        }
+        Ok(found)
+    }
+}

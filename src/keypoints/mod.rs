@@ -1,0 +1,67 @@
+//! 2D keypoints on a photo from MediaPipe's landmark models (Apache-2.0, converted to ONNX by
+//! `tools/convert_mediapipe.py`) through ONNX Runtime, as MediaPipe's holistic pipeline chains
+//! them: the pose model on the whole square photo gives the body points and a person mask; the
+//! face model then sees a crop placed by the pose model's face points, and a second crop placed by
+//! its own first answer.
+
+mod face;
+mod pose;
+mod roi;
+
+pub use face::{
+    FACE_EYE_CORNERS, FACE_INPUT, FACE_MODEL_PATH, FACE_POINTS, FaceLandmarker, FaceLandmarks,
+};
+pub use pose::{COCO_FROM_MEDIAPIPE, POSE_INPUT, POSE_MODEL_PATH, PoseKeypoints, PoseLandmarker};
+pub use roi::Roi;
+
+use glam::Vec2;
+
+use crate::onnx::{OnnxError, OnnxRuntime};
+use crate::reconstruct::SourceImage;
+
+/// One keypoint: a named landmark's image position and how sure the model is that it is visible.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Keypoint {
+    pub name: &'static str,
+    /// Pixel-edge coordinates in an image of side `side` (the size `detect` was asked for).
+    pub pixel: Vec2,
+    /// sigmoid(visibility) · sigmoid(presence), in [0, 1].
+    pub confidence: f32,
+}
+
+/// Everything the models found on one photo.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Detections {
+    pub pose: PoseKeypoints,
+    /// `None` when the pose model saw no face or the face model rejected its crop.
+    pub face: Option<FaceLandmarks>,
+}
+
+/// The shipped keypoint models, loaded once and run on each photo.
+pub struct Landmarkers {
+    pub pose: PoseLandmarker,
+    pub face: FaceLandmarker,
+}
+
+impl Landmarkers {
+    pub fn load(runtime: &OnnxRuntime) -> Result<Self, OnnxError> {
+        Ok(Self {
+            pose: PoseLandmarker::load(runtime)?,
+            face: FaceLandmarker::load(runtime)?,
+        })
+    }
+
+    /// The pose model on the photo, then the face model where the pose model puts the face.
+    pub fn detect(&mut self, source: &SourceImage) -> Result<Detections, OnnxError> {
+        let pose = self.pose.detect(source)?;
+        let face = match Roi::face_from_pose(&pose.keypoints) {
+            Some(roi) => self.face.detect(source, roi)?,
+            None => None,
+        };
+        Ok(Detections { pose, face })
+    }
+}
+
+fn sigmoid(x: f32) -> f32 {
+    1.0 / (1.0 + (-x).exp())
+}
