@@ -293,6 +293,16 @@ fn print_fit(f: &guava::fit::FitReport) {
         (None, Some(why)) => println!("  face not fitted: {why}"),
         (None, None) => {}
     }
+    match &f.hands {
+        Some(h) => println!(
+            "  hands: {} found, {} points, {:.1} px RMS (rest fingers: {:.1} px)",
+            h.hands,
+            h.observed.len(),
+            h.rms_px,
+            h.rms_before_px
+        ),
+        None => println!("  hands: none found"),
+    }
 }
 
 fn reconstruct(image: &Path, tracking: Option<&Path>, fit: bool, out: &Path) -> Result<()> {
@@ -400,8 +410,8 @@ fn fit(image: &Path, out: &Path, overlay: Option<&Path>) -> Result<()> {
     Ok(())
 }
 
-/// The photo at twice its size with each point found (green) joined to where the fitted body
-/// puts it (red): body keypoints as rings, face-mesh points as dots.
+/// The photo at twice its size with each point found (green) and where the fitted body puts it
+/// (red): body keypoints as rings, face-mesh and hand points as dots.
 fn write_fit_overlay(
     body: &guava::body::BodyModel,
     source: &guava::reconstruct::SourceImage,
@@ -446,11 +456,17 @@ fn write_fit_overlay(
             dot(glam::Vec2::new(q.x, q.y), 2.5, red, false);
         }
     }
-    if let Some(face) = &report.face {
-        for (&seen, &fitted) in face.observed.iter().zip(&face.fitted) {
-            dot(seen, 1.5, green, false);
-            dot(fitted, 1.0, red, false);
-        }
+    let face = report
+        .face
+        .iter()
+        .flat_map(|f| f.observed.iter().zip(&f.fitted));
+    let hands = report
+        .hands
+        .iter()
+        .flat_map(|h| h.observed.iter().zip(&h.fitted));
+    for (&seen, &fitted) in face.chain(hands) {
+        dot(seen, 1.5, green, false);
+        dot(fitted, 1.0, red, false);
     }
     guava::render::save_png(&canvas, path)
 }

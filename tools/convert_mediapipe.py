@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Converts MediaPipe's pose and face landmark models to ONNX and ships the demo portrait, once,
-offline.
+"""Converts MediaPipe's pose, face and hand landmark models to ONNX and ships the demo portrait,
+once, offline.
 
 Needs (not in CI; a throw-away venv of ~1.7 GB):
     pip install mediapipe==0.10.21 tensorflow-cpu tf2onnx onnxruntime==1.32.0 pillow
@@ -21,6 +21,12 @@ Writes:
   468×3 landmarks (x, y in input pixels, z relative depth) and a face-presence logit.
 - tests/data/face_landmark_fixture.json and tests/data/demo_face_192.png: an axis-aligned face crop
   of the demo portrait (the box is fixed here, not our crop code) and TFLite's output for it.
+- assets/models/hand_landmark_full.onnx: MediaPipe `hand_landmark_full.tflite` (Apache-2.0, same
+  wheel), opset 17. Input [1,224,224,3] RGB in [0, 1] (a hand crop, fingers up); outputs 21×3
+  landmarks in input pixels, a hand-presence score, handedness and 21×3 world landmarks.
+- tests/data/hand_landmark_fixture.json and tests/data/demo_hand_224.png: a crop of the demo
+  portrait where her right hand would be (the portrait shows no hand: the numbers check the
+  conversion, the low presence what the model says of a crop without a hand) and TFLite's output.
 Each converted model is checked against the TFLite interpreter on the real photo (not only random
 input) before anything is written.
 """
@@ -98,6 +104,38 @@ def main():
     json.dump(fixture, open(os.path.join(ROOT, "tests/data/pose_landmark_fixture.json"), "w"), indent=1)
     print(f"wrote {onnx_path} ({len(onnx_bytes) / 1e6:.1f} MB), assets/demo_portrait.png, the fixture")
     face(tf, ort, image, os.path.join(modules, "face_landmark/face_landmark.tflite"), models)
+    hand(tf, ort, image, os.path.join(modules, "hand_landmark/hand_landmark_full.tflite"), models)
+
+
+# Her right hand's side of the demo portrait (it is out of frame): the suit's cuff and glove area.
+HAND_BOX = (40, 300, 200, 460)
+
+
+def hand(tf, ort, image, tflite, models):
+    from PIL import Image
+    crop = image.crop(HAND_BOX).resize((224, 224), Image.BILINEAR)
+    x = np.asarray(crop, np.float32)[None] / 255.0
+    outputs = run_tflite(tf, tflite, x)
+    onnx_bytes = to_onnx(tflite)
+    session = ort.InferenceSession(onnx_bytes)
+    got = dict(zip([o.name for o in session.get_outputs()], session.run(None, {session.get_inputs()[0].name: x})))
+    worst = max(np.abs(got[k] - outputs[k]).max() for k in outputs)
+    if worst > 0.01:
+        sys.exit(f"hand: ONNX and TFLite differ by {worst}")
+    print(f"hand: ONNX vs TFLite within {worst:.2e}, presence {outputs['Identity_1'].item():.3f}")
+    path = os.path.join(models, "hand_landmark_full.onnx")
+    open(path, "wb").write(onnx_bytes)
+    crop.save(os.path.join(ROOT, "tests/data/demo_hand_224.png"))
+    fixture = {
+        "source": "TFLite interpreter on tests/data/demo_hand_224.png / 255 (the demo portrait's "
+                  f"box {list(HAND_BOX)} resized by Pillow, bilinear)",
+        "model": "mediapipe 0.10.21 modules/hand_landmark/hand_landmark_full.tflite",
+        "landmarks": [round(float(v), 3) for v in outputs["Identity"].ravel()],
+        "presence": round(float(outputs["Identity_1"].item()), 5),
+        "handedness": round(float(outputs["Identity_2"].item()), 5),
+    }
+    json.dump(fixture, open(os.path.join(ROOT, "tests/data/hand_landmark_fixture.json"), "w"))
+    print(f"wrote {path} ({len(onnx_bytes) / 1e6:.1f} MB) and the hand fixture")
 
 
 # The demo portrait's face, by eye: a square around it with MediaPipe's ~1.5× margin.

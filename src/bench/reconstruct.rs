@@ -120,7 +120,7 @@ fn fit_demo_portrait(body: &BodyModel, iterations: usize) -> anyhow::Result<()> 
     }
     let report = last.expect("ran");
     println!(
-        "fit of the demo portrait: keypoint models (pose, face ×2) {:.1} ms, fit {:.1} ms ({} body keypoints, {:.1} px RMS; {}; {} iterations)",
+        "fit of the demo portrait: keypoint models (pose, face ×2, hands where the pose model sees wrists) {:.1} ms, fit {:.1} ms ({} body keypoints, {:.1} px RMS; {}; {} hands; {} iterations)",
         median(keypoint_ms),
         median(fit_ms),
         report.keypoints_used,
@@ -132,6 +132,7 @@ fn fit_demo_portrait(body: &BodyModel, iterations: usize) -> anyhow::Result<()> 
             ),
             |f| format!("{} face points, {:.1} px RMS", f.points_used, f.rms_px)
         ),
+        report.hands.as_ref().map_or(0, |h| h.hands),
         report.iterations
     );
     Ok(())

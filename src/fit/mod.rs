@@ -14,15 +14,19 @@
 //! put.
 
 mod face;
+mod hand;
 mod lm;
 
 pub use face::{FACE_FEATURES, FACE_FIT_POINTS, FaceEmbedding, embed_face};
+pub use hand::{BodyPoint, hand_targets};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use crate::body::{BodyModel, BodyPose, Landmark, PointPoser, TargetGroup};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
-use crate::keypoints::{Detections, FACE_EYE_CORNERS, FaceLandmarker, FaceLandmarks, Keypoint};
+use crate::keypoints::{
+    Detections, FACE_EYE_CORNERS, FaceLandmarker, FaceLandmarks, HandLandmarks, Keypoint,
+};
 use crate::reconstruct::SourceView;
 
 /// The joints the body stage turns (besides the root).
@@ -91,6 +95,10 @@ pub const EXPRESSION_PRIOR_PER_EYE_SPAN: f64 = 0.03;
 const ROOT_PRIOR_PX_PER_RAD: f64 = 2.0;
 /// Keypoints the model is less sure of are left out.
 pub const MIN_CONFIDENCE: f32 = 0.5;
+/// Hand points count like face points; finger joints turned by 1 rad cost as much as a point off
+/// by this fraction of the palm (wrist to middle knuckle), so the prior scales with the hand.
+const HAND_POINT_WEIGHT: f64 = 0.5;
+const FINGER_PRIOR_PER_PALM: f64 = 0.1;
 /// The face mesh's ~100 points are not independent observations: each counts at this weight.
 const FACE_POINT_WEIGHT: f64 = 0.5;
 const ITERATIONS: usize = 30;
@@ -117,6 +125,22 @@ pub struct FitReport {
     pub face: Option<FaceFitReport>,
     /// Why the face stage did not run, when it did not.
     pub face_skipped: Option<String>,
+    /// The hand stage, when the hand model found a hand.
+    pub hands: Option<HandFitReport>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct HandFitReport {
+    pub hands: usize,
+    pub iterations: usize,
+    /// Root-mean-square reprojection error of the hand points before and after the hand stage.
+    pub rms_before_px: f32,
+    pub rms_px: f32,
+    /// Each hand point as the model found it, and where the fitted body puts it (source pixels).
+    pub observed: Vec<Vec2>,
+    pub fitted: Vec<Vec2>,
+    /// What each point is on the body, to re-project it when the pose is adjusted.
+    pub targets: Vec<BodyPoint>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -163,6 +187,13 @@ enum Unknown {
     FeatureOffset(usize, usize),
 }
 
+/// What an observed pixel is of: a posed point of the poser, or a joint.
+#[derive(Clone, Copy)]
+enum Target {
+    Point(usize),
+    Joint(usize),
+}
+
 /// A pose and camera as the fit holds them, with the face's own size and feature offsets.
 #[derive(Clone)]
 struct State {
@@ -200,8 +231,8 @@ struct Stage<'a> {
     body: &'a BodyModel,
     side: u32,
     poser: &'a mut PointPoser,
-    /// (point index in the poser, observed pixel, weight); points not observed are skipped.
-    observations: Vec<(usize, Vec2, f64)>,
+    /// (what is observed, observed pixel, weight).
+    observations: Vec<(Target, Vec2, f64)>,
     /// Per observation: whether it is a face point, and the feature it belongs to.
     face_points: Vec<(bool, Option<usize>)>,
     projected: Vec<Vec2>,
@@ -232,8 +263,12 @@ impl Stage<'_> {
         let camera = camera_for(s.camera, self.side);
         let mut ok = posed.is_ok();
         self.projected.clear();
-        for &(i, _, _) in &self.observations {
-            let q = camera.project(self.points[i]);
+        for &(target, _, _) in &self.observations {
+            let x = match target {
+                Target::Point(i) => self.points[i],
+                Target::Joint(j) => self.joints[j],
+            };
+            let q = camera.project(x);
             ok &= q.z > 0.0 && q.is_finite();
             self.projected.push(Vec2::new(q.x, q.y));
         }
@@ -326,26 +361,50 @@ pub fn fit_detections(
         (Some(f), Ok(e)) => Some((f, e)),
         _ => None,
     };
-    let (view, mut report) = fit_keypoints(body, &detections.pose.keypoints, face, side)?;
+    let input = FitInput {
+        keypoints: &detections.pose.keypoints,
+        face,
+        hands: &detections.hands,
+    };
+    let (view, mut report) = fit_keypoints(body, &input, side)?;
     report.face_skipped = embedding.err();
     Ok((view, report))
 }
 
-/// Fits the default body to a photo's body `keypoints` (and its face mesh, with the body's
-/// embedding of it, when given) in a `side`² image seen by GUAVA's camera; returns the source
-/// view (pose and camera) for reconstruction.
+/// What the fit sees on a photo.
+pub struct FitInput<'a> {
+    pub keypoints: &'a [Keypoint],
+    /// The face mesh with the body's embedding of it.
+    pub face: Option<(&'a FaceLandmarks, &'a FaceEmbedding)>,
+    pub hands: &'a [HandLandmarks],
+}
+
+impl<'a> FitInput<'a> {
+    /// Body keypoints only.
+    pub fn body(keypoints: &'a [Keypoint]) -> Self {
+        Self {
+            keypoints,
+            face: None,
+            hands: &[],
+        }
+    }
+}
+
+/// Fits the default body to what `input` holds (body keypoints; the face mesh and hands when
+/// given) in a `side`² image seen by GUAVA's camera; returns the source view (pose and camera)
+/// for reconstruction.
 pub fn fit_keypoints(
     body: &BodyModel,
-    keypoints: &[Keypoint],
-    face: Option<(&FaceLandmarks, &FaceEmbedding)>,
+    input: &FitInput,
     side: u32,
 ) -> Result<(SourceView, FitReport), FitError> {
+    let (keypoints, face) = (input.keypoints, input.face);
     let landmark = |name: &str| body.landmarks.iter().position(|l| l.name == name);
     let mut observations = Vec::new();
     let mut names = Vec::new();
     for k in keypoints.iter().filter(|k| k.confidence >= MIN_CONFIDENCE) {
         let l = landmark(k.name).ok_or_else(|| FitError::MissingOnBody(k.name.into()))?;
-        observations.push((l, k.pixel, (k.confidence as f64).sqrt()));
+        observations.push((Target::Point(l), k.pixel, (k.confidence as f64).sqrt()));
         names.push(k.name);
     }
     let has = |n: &str| names.contains(&n);
@@ -364,7 +423,10 @@ pub fn fit_keypoints(
     let rest = body.landmark_positions(&body.vertices);
     let (ls, rs) = (landmark("left_shoulder"), landmark("right_shoulder"));
     let (ls, rs) = (ls.expect("checked"), rs.expect("checked"));
-    let observed = |l: usize| observations.iter().find(|o| o.0 == l).expect("checked").1;
+    let observed = |l: usize| {
+        let of = |o: &&(Target, Vec2, f64)| matches!(o.0, Target::Point(i) if i == l);
+        observations.iter().find(of).expect("checked").1
+    };
     let (m3, w3) = (0.5 * (rest[ls] + rest[rs]), rest[ls].distance(rest[rs]));
     let (m2, w2) = (
         0.5 * (observed(ls) + observed(rs)),
@@ -385,9 +447,19 @@ pub fn fit_keypoints(
     };
     let camera_step = 1e-4 * depth as f64;
 
-    // The body's landmarks first, then the face points, all posed by one poser.
+    // The body's landmarks first, then the face points, then the fingertips, all posed by one
+    // poser.
     let face_points: &[Landmark] = face.map_or(&[], |(_, e)| &e.points);
-    let mut poser = PointPoser::new(body, body.landmarks.iter().chain(face_points));
+    let hand_targets = input
+        .hands
+        .iter()
+        .map(|h| hand_targets(body, h.side))
+        .collect::<Result<Vec<_>, _>>()?;
+    let tips = hand_targets.iter().flatten().filter_map(|t| match t {
+        BodyPoint::Surface(l) => Some(l),
+        BodyPoint::Joint(_) => None,
+    });
+    let mut poser = PointPoser::new(body, body.landmarks.iter().chain(face_points).chain(tips));
 
     let mut unknowns: Vec<(Unknown, f64)> = (0..3)
         .map(|k| (Unknown::Joint(0, k), ROOT_PRIOR_PX_PER_RAD))
@@ -425,7 +497,10 @@ pub fn fit_keypoints(
                 .iter()
                 .enumerate()
                 .take(embedding.points.len())
-                .map(|(k, &i)| (first + k, landmarks.points[i], FACE_POINT_WEIGHT)),
+                .map(|(k, &i)| {
+                    let target = Target::Point(first + k);
+                    (target, landmarks.points[i], FACE_POINT_WEIGHT)
+                }),
         );
         stage.face_points.extend(
             (0..embedding.points.len())
@@ -489,12 +564,58 @@ pub fn fit_keypoints(
         });
         result = with_face;
     }
+
+    let mut hands_report = None;
+    if !input.hands.is_empty() {
+        let start = stage.observations.len();
+        let mut tip = body.landmarks.len() + face_points.len();
+        let mut unknowns = Vec::new();
+        for (h, targets) in input.hands.iter().zip(&hand_targets) {
+            for (t, &p) in targets.iter().zip(&h.points) {
+                let target = match t {
+                    BodyPoint::Joint(j) => Target::Joint(*j),
+                    BodyPoint::Surface(_) => {
+                        tip += 1;
+                        Target::Point(tip - 1)
+                    }
+                };
+                stage.observations.push((target, p, HAND_POINT_WEIGHT));
+                stage.face_points.push((false, None));
+            }
+            let palm = h.points[0].distance(h.points[9]).max(1.0) as f64;
+            for j in hand::hand_joints(body, h.side)? {
+                let prior = FINGER_PRIOR_PER_PALM * palm;
+                unknowns.extend((0..3).map(|k| (Unknown::Joint(j, k), prior)));
+            }
+        }
+        stage.unknowns = unknowns;
+        stage.antagonists.clear();
+        stage.base = result.clone();
+        let range = start..stage.observations.len();
+        let rms_before_px = stage.rms(&result, range.clone());
+        let (with_hands, hand_iterations) = stage.solve(camera_step);
+        iterations += hand_iterations;
+        hands_report = Some(HandFitReport {
+            hands: input.hands.len(),
+            iterations: hand_iterations,
+            rms_before_px,
+            rms_px: stage.rms(&with_hands, range.clone()),
+            observed: stage.observations[range.clone()]
+                .iter()
+                .map(|o| o.1)
+                .collect(),
+            fitted: stage.projected(&with_hands, range),
+            targets: hand_targets.into_iter().flatten().collect(),
+        });
+        result = with_hands;
+    }
     let report = FitReport {
         keypoints_used: body_observed,
         iterations,
         rms_px: stage.rms(&result, 0..body_observed),
         face: face_report,
         face_skipped: None,
+        hands: hands_report,
     };
     Ok((
         SourceView {

@@ -6,8 +6,9 @@ use std::path::Path;
 
 use glam::Vec2;
 
+use super::model::SquareModel;
 use super::{Roi, sigmoid};
-use crate::onnx::{OnnxError, OnnxRuntime, Session, TensorF32};
+use crate::onnx::{OnnxError, OnnxRuntime};
 use crate::reconstruct::SourceImage;
 
 pub const FACE_MODEL_PATH: &str = concat!(
@@ -33,7 +34,7 @@ pub struct FaceLandmarks {
 }
 
 pub struct FaceLandmarker {
-    session: Session,
+    model: SquareModel,
 }
 
 impl FaceLandmarker {
@@ -42,42 +43,19 @@ impl FaceLandmarker {
     }
 
     pub fn load_from(runtime: &OnnxRuntime, path: &Path) -> Result<Self, OnnxError> {
-        let session = runtime.session(path)?;
-        if session.input_names().len() != 1 || session.output_names().len() != 2 {
-            return Err(OnnxError::Model {
-                path: path.to_path_buf(),
-                reason: format!(
-                    "expected MediaPipe's face landmark model (1 input, 2 outputs), found inputs {:?} and outputs {:?}",
-                    session.input_names(),
-                    session.output_names()
-                ),
-            });
-        }
-        Ok(Self { session })
+        let what = "MediaPipe's face landmark model";
+        Ok(Self {
+            model: SquareModel::load(runtime, path, what, 2, FACE_INPUT)?,
+        })
     }
 
     /// Runs the model on a 192² RGB input in [0, 1]: the points in input pixels and the
     /// presence probability.
     pub fn run(&mut self, input: &[f32]) -> Result<(Vec<[f32; 3]>, f32), OnnxError> {
-        assert_eq!(input.len(), FACE_INPUT * FACE_INPUT * 3, "192² RGB input");
-        let name = self.session.input_names()[0].clone();
-        let tensor = TensorF32 {
-            shape: vec![1, FACE_INPUT, FACE_INPUT, 3],
-            data: input.to_vec(),
-        };
-        let outputs = self.session.run(vec![(&name, tensor)])?;
-        let find = |len: usize| outputs.iter().find(|o| o.data.len() == len);
-        let bad = |what: &str| OnnxError::Run {
-            path: self.session.path.clone(),
-            reason: format!("the model gave no {what} output"),
-        };
-        let points = find(FACE_POINTS * 3).ok_or_else(|| bad("landmark"))?;
-        let logit = find(1).ok_or_else(|| bad("face flag"))?.data[0];
-        let points = points
-            .data
-            .chunks_exact(3)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect();
+        let outputs = self.model.run(input)?;
+        let points = self.model.output(&outputs, FACE_POINTS * 3, "landmark")?;
+        let logit = self.model.output(&outputs, 1, "face flag")?[0];
+        let points = points.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
         Ok((points, sigmoid(logit)))
     }
 

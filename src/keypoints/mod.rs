@@ -1,16 +1,19 @@
 //! 2D keypoints on a photo from MediaPipe's landmark models (Apache-2.0, converted to ONNX by
 //! `tools/convert_mediapipe.py`) through ONNX Runtime, as MediaPipe's holistic pipeline chains
 //! them: the pose model on the whole square photo gives the body points and a person mask; the
-//! face model then sees a crop placed by the pose model's face points, and a second crop placed by
-//! its own first answer.
+//! face and hand models then see crops placed by the pose model's face and hand points, and
+//! second crops placed by their own first answers.
 
 mod face;
+mod hand;
+mod model;
 mod pose;
 mod roi;
 
 pub use face::{
     FACE_EYE_CORNERS, FACE_INPUT, FACE_MODEL_PATH, FACE_POINTS, FaceLandmarker, FaceLandmarks,
 };
+pub use hand::{HAND_INPUT, HAND_MODEL_PATH, HAND_POINTS, HandLandmarker, HandLandmarks, Side};
 pub use pose::{COCO_FROM_MEDIAPIPE, POSE_INPUT, POSE_MODEL_PATH, PoseKeypoints, PoseLandmarker};
 pub use roi::Roi;
 
@@ -35,12 +38,15 @@ pub struct Detections {
     pub pose: PoseKeypoints,
     /// `None` when the pose model saw no face or the face model rejected its crop.
     pub face: Option<FaceLandmarks>,
+    /// The hands the hand model found where the pose model put wrists (0, 1 or 2).
+    pub hands: Vec<HandLandmarks>,
 }
 
 /// The shipped keypoint models, loaded once and run on each photo.
 pub struct Landmarkers {
     pub pose: PoseLandmarker,
     pub face: FaceLandmarker,
+    pub hand: HandLandmarker,
 }
 
 impl Landmarkers {
@@ -48,17 +54,22 @@ impl Landmarkers {
         Ok(Self {
             pose: PoseLandmarker::load(runtime)?,
             face: FaceLandmarker::load(runtime)?,
+            hand: HandLandmarker::load(runtime)?,
         })
     }
 
-    /// The pose model on the photo, then the face model where the pose model puts the face.
+    /// The pose model on the photo, then the face and hand models where it puts them.
     pub fn detect(&mut self, source: &SourceImage) -> Result<Detections, OnnxError> {
         let pose = self.pose.detect(source)?;
         let face = match Roi::face_from_pose(&pose.keypoints) {
             Some(roi) => self.face.detect(source, roi)?,
             None => None,
         };
-        Ok(Detections { pose, face })
+        let mut hands = Vec::new();
+        for side in [Side::Left, Side::Right] {
+            hands.extend(self.hand.detect(source, &pose, side)?);
+        }
+        Ok(Detections { pose, face, hands })
     }
 }
 

@@ -10,8 +10,9 @@ use std::path::Path;
 
 use glam::Vec2;
 
+use super::model::SquareModel;
 use super::{Keypoint, sigmoid};
-use crate::onnx::{OnnxError, OnnxRuntime, Session, TensorF32};
+use crate::onnx::{OnnxError, OnnxRuntime};
 use crate::reconstruct::SourceImage;
 use crate::reconstruct::fill::bilinear_clamped;
 
@@ -51,12 +52,23 @@ pub struct PoseKeypoints {
     pub presence: f32,
     /// The raw landmark rows (x, y, z in input pixels, visibility and presence logits).
     pub landmarks: Vec<[f32; 5]>,
+    /// Source pixels per input pixel.
+    pub scale: f32,
     pub keypoints: Vec<Keypoint>,
     /// Person probability per pixel of the 256² input, row-major.
     pub mask: Vec<f32>,
 }
 
 impl PoseKeypoints {
+    /// MediaPipe landmark `i` in source pixels, with its confidence.
+    pub fn point(&self, i: usize) -> (Vec2, f32) {
+        let l = self.landmarks[i];
+        (
+            Vec2::new(l[0], l[1]) * self.scale,
+            sigmoid(l[3]) * sigmoid(l[4]),
+        )
+    }
+
     /// The mask resized (bilinear) to `side`² for a source image of that size.
     pub fn mask_at(&self, side: usize) -> Vec<f32> {
         let scale = POSE_INPUT as f32 / side as f32;
@@ -71,7 +83,7 @@ impl PoseKeypoints {
 }
 
 pub struct PoseLandmarker {
-    session: Session,
+    model: SquareModel,
 }
 
 impl PoseLandmarker {
@@ -81,18 +93,10 @@ impl PoseLandmarker {
     }
 
     pub fn load_from(runtime: &OnnxRuntime, path: &Path) -> Result<Self, OnnxError> {
-        let session = runtime.session(path)?;
-        if session.input_names().len() != 1 || session.output_names().len() != 5 {
-            return Err(OnnxError::Model {
-                path: path.to_path_buf(),
-                reason: format!(
-                    "expected MediaPipe's pose landmark model (1 input, 5 outputs), found inputs {:?} and outputs {:?}",
-                    session.input_names(),
-                    session.output_names()
-                ),
-            });
-        }
-        Ok(Self { session })
+        let what = "MediaPipe's pose landmark model";
+        Ok(Self {
+            model: SquareModel::load(runtime, path, what, 5, POSE_INPUT)?,
+        })
     }
 
     /// Runs the model on a source image (its RGB as loaded, before any mask is applied);
@@ -105,44 +109,35 @@ impl PoseLandmarker {
     /// Runs the model on a 256² RGB input in [0, 1] (row-major, interleaved); keypoints are
     /// scaled to an image of side `side` that shows the same square.
     pub fn run(&mut self, input: &[f32], side: f32) -> Result<PoseKeypoints, OnnxError> {
-        assert_eq!(input.len(), POSE_INPUT * POSE_INPUT * 3, "256² RGB input");
-        let name = self.session.input_names()[0].clone();
-        let tensor = TensorF32 {
-            shape: vec![1, POSE_INPUT, POSE_INPUT, 3],
-            data: input.to_vec(),
-        };
-        let outputs = self.session.run(vec![(&name, tensor)])?;
-        let find = |len: usize| outputs.iter().find(|o| o.data.len() == len);
-        let bad = |what: &str| OnnxError::Run {
-            path: self.session.path.clone(),
-            reason: format!("the model gave no {what} output"),
-        };
-        let raw = find(LANDMARKS * 5).ok_or_else(|| bad("landmark"))?;
-        let presence = find(1).ok_or_else(|| bad("presence"))?.data[0];
-        let mask = find(POSE_INPUT * POSE_INPUT).ok_or_else(|| bad("segmentation"))?;
+        let outputs = self.model.run(input)?;
+        let raw = self.model.output(&outputs, LANDMARKS * 5, "landmark")?;
+        let presence = self.model.output(&outputs, 1, "presence")?[0];
+        let mask = self
+            .model
+            .output(&outputs, POSE_INPUT * POSE_INPUT, "segmentation")?;
         let landmarks: Vec<[f32; 5]> = raw
-            .data
             .chunks_exact(5)
             .map(|c| [c[0], c[1], c[2], c[3], c[4]])
             .collect();
-        let scale = side / POSE_INPUT as f32;
-        let keypoints = COCO_FROM_MEDIAPIPE
+        let mut found = PoseKeypoints {
+            presence,
+            landmarks,
+            scale: side / POSE_INPUT as f32,
+            keypoints: Vec::new(),
+            mask: mask.iter().map(|&x| sigmoid(x)).collect(),
+        };
+        found.keypoints = COCO_FROM_MEDIAPIPE
             .iter()
             .map(|&(name, i)| {
-                let l = landmarks[i];
+                let (pixel, confidence) = found.point(i);
                 Keypoint {
                     name,
-                    pixel: Vec2::new(l[0], l[1]) * scale,
-                    confidence: sigmoid(l[3]) * sigmoid(l[4]),
+                    pixel,
+                    confidence,
                 }
             })
             .collect();
-        Ok(PoseKeypoints {
-            presence,
-            landmarks,
-            keypoints,
-            mask: mask.data.iter().map(|&x| sigmoid(x)).collect(),
-        })
+        Ok(found)
     }
 }
 

@@ -4,7 +4,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::{FACE_EYE_CORNERS, Keypoint};
+use super::{FACE_EYE_CORNERS, Keypoint, PoseKeypoints, Side};
 use crate::reconstruct::SourceImage;
 use crate::reconstruct::fill::bilinear_clamped;
 
@@ -12,7 +12,15 @@ use crate::reconstruct::fill::bilinear_clamped;
 const FACE_MARGIN: f32 = 1.5;
 /// The face mesh spans about 4.5 eye distances with that margin (forehead to chin ≈ 3).
 const FACE_SIDE_PER_EYE_DISTANCE: f32 = 4.5;
-/// Pose points the face crop needs at least this sure.
+/// A hand crop spans this many wrist-to-knuckle lengths (the pose model's hand points sit near
+/// the knuckles; the fingers reach about as far again).
+const HAND_SIDE_PER_PALM: f32 = 4.0;
+/// MediaPipe's margin around a hand's points.
+const HAND_MARGIN: f32 = 1.6;
+/// MediaPipe's pose landmarks of each hand: wrist, pinky, index.
+const POSE_HAND: [(Side, [usize; 3]); 2] =
+    [(Side::Left, [15, 17, 19]), (Side::Right, [16, 18, 20])];
+/// Pose points the face and hand crops need at least this sure.
 const MIN_POSE_CONFIDENCE: f32 = 0.5;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -85,5 +93,88 @@ impl Roi {
             side: FACE_MARGIN * extent.x.max(extent.y),
             angle,
         }
+    }
+
+    /// The `side` hand's crop from the pose model's wrist, pinky and index points, rotated so the
+    /// fingers point up (`None` if the pose model is unsure of them).
+    pub fn hand_from_pose(pose: &PoseKeypoints, side: Side) -> Option<Self> {
+        let (_, [w, p, i]) = POSE_HAND.iter().find(|(s, _)| *s == side)?;
+        let [wrist, pinky, index] = [*w, *p, *i].map(|k| pose.point(k));
+        if [wrist, pinky, index]
+            .iter()
+            .any(|(_, c)| *c < MIN_POSE_CONFIDENCE)
+        {
+            return None;
+        }
+        let palm = 0.5 * (pinky.0 + index.0) - wrist.0;
+        Some(Self::upright(
+            wrist.0 + palm,
+            HAND_SIDE_PER_PALM * palm.length(),
+            palm,
+        ))
+    }
+
+    /// The crop around a hand's 21 points: wrist to middle knuckle pointing up, the points'
+    /// bounding box in that frame, its longer side times the margin.
+    pub fn hand_from_landmarks(points: &[Vec2]) -> Self {
+        let up = points[9] - points[0];
+        let frame = Self::upright(Vec2::ZERO, 1.0, up);
+        let to_crop = Vec2::from_angle(-frame.angle);
+        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+        for &p in points {
+            let q = to_crop.rotate(p);
+            lo = lo.min(q);
+            hi = hi.max(q);
+        }
+        let extent = hi - lo;
+        Self {
+            centre: Vec2::from_angle(frame.angle).rotate(0.5 * (lo + hi)),
+            side: HAND_MARGIN * extent.x.max(extent.y),
+            angle: frame.angle,
+        }
+    }
+
+    /// A crop whose up (−y) points along `up` in the image.
+    fn upright(centre: Vec2, side: f32, up: Vec2) -> Self {
+        Self {
+            centre,
+            side,
+            angle: up.x.atan2(-up.y),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Crops put the feature upright: the model's "up" is wrist → middle knuckle, its "right"
+    /// is the eye line, whatever way the hand or face is turned in the photo.
+    #[test]
+    fn crops_are_upright_for_the_model() {
+        let n = 224;
+        let top = Vec2::new(n as f32 / 2.0, 0.0);
+        for up in [Vec2::X, -Vec2::Y, Vec2::new(-1.0, 1.0).normalize()] {
+            let mut points = vec![Vec2::new(100.0, 100.0); 21];
+            points[9] = points[0] + 40.0 * up;
+            points[12] = points[0] + 80.0 * up;
+            let roi = Roi::hand_from_landmarks(&points);
+            let towards = (roi.to_image(top, n) - roi.centre).normalize();
+            assert!(
+                towards.dot(up) > 0.999,
+                "{up}: the crop's top is towards {towards}"
+            );
+            // The points' extent (80 px) times the margin.
+            assert!((roi.side - HAND_MARGIN * 80.0).abs() < 1e-3);
+        }
+        let mut face = vec![Vec2::new(200.0, 200.0); 468];
+        face[FACE_EYE_CORNERS.0] = Vec2::new(180.0, 190.0);
+        face[FACE_EYE_CORNERS.1] = Vec2::new(220.0, 210.0);
+        let roi = Roi::face_from_landmarks(&face);
+        let right = (roi.to_image(Vec2::new(192.0, 96.0), 192) - roi.centre).normalize();
+        assert!(
+            right.dot(Vec2::new(2.0, 1.0).normalize()) > 0.999,
+            "{right}"
+        );
     }
 }

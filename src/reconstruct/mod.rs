@@ -312,10 +312,11 @@ pub fn reconstruct_photo_file(
             models.detect(&image)
         } else {
             // Only the mask is needed: the face model would find nothing the tracking lacks.
-            models
-                .pose
-                .detect(&image)
-                .map(|pose| Detections { pose, face: None })
+            models.pose.detect(&image).map(|pose| Detections {
+                pose,
+                face: None,
+                hands: Vec::new(),
+            })
         };
         keypoints = Some(found.map_err(|e| ReconstructError::Keypoints(e.to_string()))?);
     }

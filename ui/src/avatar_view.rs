@@ -6,7 +6,8 @@ use std::sync::Arc;
 
 use glam::Vec2;
 use guava::avatar::{Avatar, Rig};
-use guava::body::{BodyModel, Landmark, PosedBody};
+use guava::body::{BodyModel, PosedBody};
+use guava::fit::BodyPoint;
 use guava::gaussians::GaussianCloud;
 use guava::reconstruct::{Report, SourceImage, SourceView};
 
@@ -83,9 +84,9 @@ pub struct SourcePreview {
     pub view: SourceView,
     /// Per body keypoint: where the model saw it, its confidence, the body landmark's index.
     keypoints: Vec<(Vec2, f32, usize)>,
-    /// Face-mesh points the fit used: where the model saw them and their place on the body.
-    face: Vec<(Vec2, Landmark)>,
-    /// Where the shown pose puts the keypoints' landmarks, then the face points (pixels).
+    /// Face-mesh and hand points the fit used: where the models saw them, their place on the body.
+    detail: Vec<(Vec2, BodyPoint)>,
+    /// Where the shown pose puts the keypoints' landmarks, then the detail points (pixels).
     fitted: Vec<Vec2>,
     /// While editing: the body pose generation `fitted` was computed for.
     fitted_for: Option<u64>,
@@ -103,17 +104,6 @@ pub enum FitAction {
     Reconstruct,
     /// Write the current pose and the photo's camera as a tracking file.
     SaveTracking,
-}
-
-fn project(camera: &guava::camera::Camera, vertices: &[glam::Vec3], l: &Landmark) -> Vec2 {
-    let x: glam::Vec3 = l
-        .vertices
-        .iter()
-        .zip(&l.weights)
-        .map(|(&v, &w)| w * vertices[v as usize])
-        .sum();
-    let q = camera.project(x);
-    Vec2::new(q.x, q.y)
 }
 
 impl SourcePreview {
@@ -144,15 +134,23 @@ impl SourcePreview {
             .fit
             .iter()
             .filter_map(|f| f.face.as_ref())
-            .flat_map(|f| f.observed.iter().copied().zip(f.surface.iter().cloned()))
-            .collect();
+            .flat_map(|f| {
+                let surface = f.surface.iter().cloned().map(BodyPoint::Surface);
+                f.observed.iter().copied().zip(surface)
+            });
+        let hands = report
+            .fit
+            .iter()
+            .filter_map(|f| f.hands.as_ref())
+            .flat_map(|h| h.observed.iter().copied().zip(h.targets.iter().cloned()));
+        let detail = face.chain(hands).collect();
         let mut preview = Self {
             image: egui::ColorImage::new([size, size], pixels),
             texture: None,
             photo: photo.to_path_buf(),
             view,
             keypoints,
-            face,
+            detail,
             fitted: Vec::new(),
             fitted_for: None,
             rms_px: report.fit.as_ref().map(|f| f.rms_px),
@@ -160,7 +158,7 @@ impl SourcePreview {
         };
         let mut posed = PosedBody::default();
         body.pose(&preview.view.pose, &mut posed).ok()?;
-        preview.fitted = preview.project_all(body, &posed.vertices);
+        preview.fitted = preview.project_all(body, &posed);
         Some(preview)
     }
 
@@ -168,13 +166,17 @@ impl SourcePreview {
         self.editing
     }
 
-    fn project_all(&self, body: &BodyModel, vertices: &[glam::Vec3]) -> Vec<Vec2> {
+    fn project_all(&self, body: &BodyModel, posed: &PosedBody) -> Vec<Vec2> {
         let camera = &self.view.camera;
-        let landmarks = self.keypoints.iter().map(|k| &body.landmarks[k.2]);
-        let face = self.face.iter().map(|f| &f.1);
+        let marks = body.landmark_positions(&posed.vertices);
+        let landmarks = self.keypoints.iter().map(|k| marks[k.2]);
+        let detail = self.detail.iter().map(|d| d.1.on(posed));
         landmarks
-            .chain(face)
-            .map(|l| project(camera, vertices, l))
+            .chain(detail)
+            .map(|x| {
+                let q = camera.project(x);
+                Vec2::new(q.x, q.y)
+            })
             .collect()
     }
 
@@ -185,7 +187,7 @@ impl SourcePreview {
             let model = body.model.clone();
             let (posed, generation) = body.posed();
             if self.fitted_for != Some(generation) {
-                self.fitted = self.project_all(&model, &posed.vertices);
+                self.fitted = self.project_all(&model, posed);
                 self.fitted_for = Some(generation);
             }
         }
@@ -216,8 +218,8 @@ impl SourcePreview {
             painter.circle_stroke(a, 3.5, egui::Stroke::new(1.5, colour));
             painter.circle_filled(b, 2.5, red);
         }
-        let face_fitted = &self.fitted[self.keypoints.len().min(self.fitted.len())..];
-        for (&(seen, _), &fitted) in self.face.iter().zip(face_fitted) {
+        let detail_fitted = &self.fitted[self.keypoints.len().min(self.fitted.len())..];
+        for (&(seen, _), &fitted) in self.detail.iter().zip(detail_fitted) {
             painter.circle_filled(to_screen(seen), 1.2, green);
             painter.circle_filled(to_screen(fitted), 1.2, red);
         }
@@ -268,7 +270,7 @@ impl SourcePreview {
             // Back to the pose the avatar was made with.
             let mut posed = PosedBody::default();
             if body.model.pose(&self.view.pose, &mut posed).is_ok() {
-                self.fitted = self.project_all(&body.model, &posed.vertices);
+                self.fitted = self.project_all(&body.model, &posed);
             }
         }
         self.editing = editing;
