@@ -287,8 +287,11 @@ fn print_fit(f: &guava::fit::FitReport) {
     );
     match (&f.face, &f.face_skipped) {
         (Some(face), _) => println!(
-            "  face: {} face-mesh points, {:.1} px RMS (rest expression: {:.1} px); the face is {:.2}× the default body's",
-            face.points_used, face.rms_px, face.rms_before_px, face.face_scale
+            "  face: {} face-mesh points, {:.1} px RMS (rest expression: {:.1} px); head {:.2}× the template's",
+            face.points_used,
+            face.rms_px,
+            face.rms_before_px,
+            1.0 + face.head_size.unwrap_or(0.0)
         ),
         (None, Some(why)) => println!("  face not fitted: {why}"),
         (None, None) => {}

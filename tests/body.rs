@@ -47,7 +47,8 @@ fn default_body_has_the_documented_content() {
     assert_eq!(m.triangles.len(), 27_676);
     assert_eq!(m.joints.len(), 77);
     assert_eq!(m.targets_in(TargetGroup::Expression).count(), 52);
-    assert_eq!(m.targets_in(TargetGroup::Shape).count(), 12);
+    // Six phenotypes × two ends, and the derived head size.
+    assert_eq!(m.targets_in(TargetGroup::Shape).count(), 13);
     for name in [
         "root",
         "jaw",
@@ -620,4 +621,54 @@ fn posing_a_few_points_matches_posing_the_mesh() {
     for (a, b) in joints.iter().zip(&posed.joints) {
         assert!(a.distance(Vec3::from(b.translation)) < 1e-6);
     }
+}
+
+/// The derived head-size target scales the head about the head joint (vertices and joints
+/// skinned only to the head move exactly by the scale), leaves what the head's joints do not
+/// skin alone, and blends the neck in between.
+#[test]
+fn head_size_scales_the_head_about_its_joint() {
+    let m = body();
+    let t = m
+        .target_index(guava::body::HEAD_SIZE)
+        .expect("derived target");
+    let mut pose = BodyPose::rest(&m);
+    pose.coefficients[t] = 0.25;
+    let p = posed(&m, &pose);
+    let head = m.joint_index("head").expect("head");
+    let centre = m.joints[head].rest;
+    let in_head = |j: usize| {
+        let mut k = Some(j);
+        while let Some(i) = k {
+            if i == head {
+                return true;
+            }
+            k = m.joints[i].parent;
+        }
+        false
+    };
+    let (mut whole, mut untouched, mut blended) = (0, 0, 0);
+    for (v, (js, ws)) in m.skin_joints.iter().zip(&m.skin_weights).enumerate() {
+        let w: f32 = js
+            .iter()
+            .zip(ws)
+            .filter(|(j, _)| in_head(**j as usize))
+            .map(|(_, w)| w)
+            .sum();
+        let expected = m.vertices[v] + 0.25 * w * (m.vertices[v] - centre);
+        assert!(p.vertices[v].distance(expected) < 1e-5, "vertex {v}");
+        if w > 0.999 {
+            whole += 1;
+        } else if w < 1e-6 {
+            untouched += 1;
+            assert!(p.vertices[v].distance(m.vertices[v]) < 1e-6);
+        } else {
+            blended += 1;
+        }
+    }
+    println!("head vertices {whole}, neck blend {blended}, unmoved {untouched}");
+    assert!(whole > 1000 && blended > 10 && untouched > 9_000);
+    let jaw = m.joint_index("jaw").expect("jaw");
+    let moved = Vec3::from(p.joints[jaw].translation);
+    assert!(moved.distance(centre + 1.25 * (m.joints[jaw].rest - centre)) < 1e-5);
 }

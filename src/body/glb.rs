@@ -226,7 +226,7 @@ impl BodyModel {
             ],
         )
         .map_err(fail)?;
-        Ok(BodyModel {
+        let mut model = BodyModel {
             name: extras.model,
             vertices,
             uvs,
@@ -239,7 +239,9 @@ impl BodyModel {
             landmarks,
             part_names,
             vertex_parts,
-        })
+        };
+        model.add_head_size();
+        Ok(model)
     }
 }
 

@@ -14,6 +14,7 @@
 mod ehm;
 mod frames;
 mod glb;
+mod head_size;
 mod joint_map;
 mod lbs;
 mod normals;
@@ -23,6 +24,7 @@ mod pose;
 pub use ehm::{EHM_FORMAT, EhmExtras, EhmIdentity, EhmModel, EhmParams};
 pub use frames::{TriangleFrame, triangle_frames};
 pub use glb::BodyAssetError;
+pub use head_size::HEAD_SIZE;
 pub use joint_map::{SMPLX_JOINTS, smplx_to_default};
 pub use normals::vertex_normals;
 pub use points::PointPoser;

@@ -22,7 +22,7 @@ pub use hand::{BodyPoint, hand_targets};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use crate::body::{BodyModel, BodyPose, Landmark, PointPoser, TargetGroup};
+use crate::body::{BodyModel, BodyPose, HEAD_SIZE, Landmark, PointPoser, TargetGroup};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
 use crate::keypoints::{
     Detections, FACE_EYE_CORNERS, FaceLandmarker, FaceLandmarks, HandLandmarks, Keypoint,
@@ -65,12 +65,11 @@ pub const FITTED_EXPRESSIONS: [&str; 14] = [
 ];
 /// The joints the face stage turns again, with the expression.
 const FACE_JOINTS: [&str; 2] = ["neck01", "head"];
-/// The person's face is not the default body's: the face stage gives it its own size (a scale
-/// of all face points about their centroid) and lets each feature (lips, eyes, brows, nose) sit
-/// a little apart from where the default face has it, so that expressions explain how features
-/// are shaped, not where they are. Priors, per unit of log-scale and per pixel of offset, as
-/// fractions of the eye span and of one point's error.
-const FACE_SCALE_PRIOR_PER_EYE_SPAN: f64 = 0.5;
+/// The person's face is not the default body's: the face stage sizes the body's head to it
+/// ([`HEAD_SIZE`], a shape target, so texture mapping sees the face where the photo has it) and
+/// lets each feature (lips, eyes, brows, nose) sit a little apart in the image from where the
+/// default face has it, so that expressions explain how features are shaped, not where they are.
+/// An offset pixel costs this fraction of one point's pixel.
 const FEATURE_OFFSET_PRIOR: f64 = 0.3;
 /// Units that pull the same points opposite ways: on a real face, whose neutral differs from
 /// the default body's, both can rise together to widen or shift a feature, so they pay for acting
@@ -148,13 +147,14 @@ pub struct FaceFitReport {
     pub points_used: usize,
     pub iterations: usize,
     /// Root-mean-square reprojection error of the face points before and after the face stage
-    /// (after: with the face's own size and feature offsets).
+    /// (after: with the features' offsets).
     pub rms_before_px: f32,
     pub rms_px: f32,
-    /// The person's face size against the default body's, as the fit found it.
-    pub face_scale: f32,
+    /// The fitted [`HEAD_SIZE`] coefficient (the head is 1 + this times the template's), when the
+    /// body has the target.
+    pub head_size: Option<f32>,
     /// Each used face point as the model found it and where the fitted body itself puts it
-    /// (source pixels, without the face's own size and offsets), for showing over the photo.
+    /// (source pixels, without the features' offsets), for showing over the photo.
     pub observed: Vec<Vec2>,
     pub fitted: Vec<Vec2>,
     /// The used points' places on the body (from the [`FaceEmbedding`]), to re-project them
@@ -181,8 +181,6 @@ enum Unknown {
     Joint(usize, usize),
     /// A morph target's coefficient, clamped to its range.
     Coefficient(usize, [f32; 2]),
-    /// The log of the person's face size against the body's (face stage only).
-    FaceScale,
     /// A face feature's image offset component (face stage only).
     FeatureOffset(usize, usize),
 }
@@ -194,12 +192,11 @@ enum Target {
     Joint(usize),
 }
 
-/// A pose and camera as the fit holds them, with the face's own size and feature offsets.
+/// A pose and camera as the fit holds them, with the face's feature offsets.
 #[derive(Clone)]
 struct State {
     pose: BodyPose,
     camera: Vec3,
-    face_scale: f32,
     feature_offsets: [Vec2; FACE_FEATURES.len()],
 }
 
@@ -209,7 +206,6 @@ impl State {
             Unknown::Camera(k) => self.camera[k] as f64,
             Unknown::Joint(j, k) => self.pose.rotations[j][k] as f64,
             Unknown::Coefficient(t, _) => self.pose.coefficients[t] as f64,
-            Unknown::FaceScale => self.face_scale as f64,
             Unknown::FeatureOffset(g, k) => self.feature_offsets[g][k] as f64,
         }
     }
@@ -220,7 +216,6 @@ impl State {
             Unknown::Camera(k) => self.camera[k] = v,
             Unknown::Joint(j, k) => self.pose.rotations[j][k] = v,
             Unknown::Coefficient(t, [lo, hi]) => self.pose.coefficients[t] = v.clamp(lo, hi),
-            Unknown::FaceScale => self.face_scale = v,
             Unknown::FeatureOffset(g, k) => self.feature_offsets[g][k] = v,
         }
     }
@@ -233,8 +228,8 @@ struct Stage<'a> {
     poser: &'a mut PointPoser,
     /// (what is observed, observed pixel, weight).
     observations: Vec<(Target, Vec2, f64)>,
-    /// Per observation: whether it is a face point, and the feature it belongs to.
-    face_points: Vec<(bool, Option<usize>)>,
+    /// Per observation: the face feature it belongs to, if any.
+    features: Vec<Option<usize>>,
     projected: Vec<Vec2>,
     /// Each unknown with its prior weight (pixels per unit away from zero).
     unknowns: Vec<(Unknown, f64)>,
@@ -272,17 +267,9 @@ impl Stage<'_> {
             ok &= q.z > 0.0 && q.is_finite();
             self.projected.push(Vec2::new(q.x, q.y));
         }
-        // The face's own size and feature offsets, about the face points' centroid.
-        let face: Vec<Vec2> = (self.projected.iter().zip(&self.face_points))
-            .filter_map(|(q, f)| f.0.then_some(*q))
-            .collect();
-        let centre = face.iter().sum::<Vec2>() / face.len().max(1) as f32;
-        let scale = s.face_scale.exp();
-        for (q, &(is_face, feature)) in self.projected.iter_mut().zip(&self.face_points) {
-            if is_face {
-                *q = centre
-                    + scale * (*q - centre)
-                    + feature.map_or(Vec2::ZERO, |g| s.feature_offsets[g]);
+        for (q, &feature) in self.projected.iter_mut().zip(&self.features) {
+            if let Some(g) = feature {
+                *q += s.feature_offsets[g];
             }
         }
         for (q, &(_, observed, w)) in self.projected.iter().zip(&self.observations) {
@@ -318,8 +305,8 @@ impl Stage<'_> {
         (self.state(&solution.params), solution.iterations)
     }
 
-    /// Where `state` puts the observed points of `range`, in pixels (face points with the
-    /// face's own size and feature offsets).
+    /// Where `state` puts the observed points of `range`, in pixels (face points with their
+    /// feature offsets).
     fn projected(&mut self, state: &State, range: std::ops::Range<usize>) -> Vec<Vec2> {
         let saved = std::mem::replace(&mut self.base, state.clone());
         let mut r = Vec::new();
@@ -436,7 +423,6 @@ pub fn fit_keypoints(
     let depth = focal * w3 / w2.max(1.0);
     let centre = side as f32 / 2.0;
     let start = State {
-        face_scale: 0.0,
         feature_offsets: [Vec2::ZERO; FACE_FEATURES.len()],
         pose: BodyPose::rest(body),
         camera: Vec3::new(
@@ -481,7 +467,7 @@ pub fn fit_keypoints(
         observations,
         unknowns,
         antagonists: Vec::new(),
-        face_points: vec![(false, None); body_observed],
+        features: vec![None; body_observed],
         projected: Vec::new(),
         base: start,
         points: Vec::new(),
@@ -502,9 +488,9 @@ pub fn fit_keypoints(
                     (target, landmarks.points[i], FACE_POINT_WEIGHT)
                 }),
         );
-        stage.face_points.extend(
+        stage.features.extend(
             (0..embedding.points.len())
-                .map(|k| (true, FACE_FEATURES.iter().position(|(_, r)| r.contains(&k)))),
+                .map(|k| FACE_FEATURES.iter().position(|(_, r)| r.contains(&k))),
         );
         let mut unknowns = Vec::new();
         for name in FACE_JOINTS {
@@ -526,10 +512,10 @@ pub fn fit_keypoints(
                     )
                 }),
         );
-        unknowns.push((
-            Unknown::FaceScale,
-            FACE_SCALE_PRIOR_PER_EYE_SPAN * eye_span as f64,
-        ));
+        if let Some(t) = body.target_index(HEAD_SIZE) {
+            let range = body.targets[t].range;
+            unknowns.push((Unknown::Coefficient(t, range), SHAPE_PRIOR_PX));
+        }
         for g in 0..FACE_FEATURES.len() {
             unknowns.extend((0..2).map(|k| (Unknown::FeatureOffset(g, k), FEATURE_OFFSET_PRIOR)));
         }
@@ -553,13 +539,14 @@ pub fn fit_keypoints(
                 .iter()
                 .map(|o| o.1)
                 .collect(),
+            head_size: body
+                .target_index(HEAD_SIZE)
+                .map(|t| with_face.pose.coefficients[t]),
             fitted: {
                 let mut body_only = with_face.clone();
-                body_only.face_scale = 0.0;
                 body_only.feature_offsets = Default::default();
                 stage.projected(&body_only, face_range)
             },
-            face_scale: with_face.face_scale.exp(),
             surface: embedding.points.clone(),
         });
         result = with_face;
@@ -580,7 +567,7 @@ pub fn fit_keypoints(
                     }
                 };
                 stage.observations.push((target, p, HAND_POINT_WEIGHT));
-                stage.face_points.push((false, None));
+                stage.features.push(None);
             }
             let palm = h.points[0].distance(h.points[9]).max(1.0) as f64;
             for j in hand::hand_joints(body, h.side)? {
