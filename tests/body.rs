@@ -614,10 +614,14 @@ fn posing_a_few_points_matches_posing_the_mesh() {
         .pose(&body, &pose, &mut points, &mut joints)
         .expect("pose points");
     assert_eq!(points.len(), body.landmarks.len());
-    // Same arithmetic in the same order: equal to f32 rounding.
-    for (a, b) in points.iter().zip(&expected) {
-        assert!(a.distance(*b) < 1e-6, "{a} vs {b}");
-    }
+    // The same sums regrouped by joint: equal up to f32 rounding on metre-sized values.
+    let worst = points
+        .iter()
+        .zip(&expected)
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0f32, f32::max);
+    println!("sparse vs full posing: {worst:.1e} m");
+    assert!(worst < 1e-5, "{worst} m");
     for (a, b) in joints.iter().zip(&posed.joints) {
         assert!(a.distance(Vec3::from(b.translation)) < 1e-6);
     }

@@ -1,25 +1,32 @@
 //! Posing a few surface points instead of the whole mesh. The fit evaluates its residuals
-//! hundreds of times per step and needs only its landmarks: [`PointPoser`] keeps just the
-//! vertices they blend, with their skin influences and the morph deltas that move them, and
-//! poses them exactly as [`BodyModel::pose`] does.
+//! thousands of times and needs only its landmarks, and a landmark (a weighted sum of vertices,
+//! up to hundreds for Anny's COCO regressors) is linear in the joints' skinning transforms:
+//! p = Σ_v w_v Σ_j s_vj A_j (x_v + Σ_t c_t δ_tv) = Σ_j A_j (m_j + Σ_t c_t d_jt) + W_j a_j,
+//! with m_j = Σ_v w_v s_vj x_v, d_jt = Σ_v w_v s_vj δ_tv and W_j = Σ_v w_v s_vj summed once here.
+//! [`PointPoser`] keeps those sums, so a point costs a few joints instead of its vertices, and
+//! gives what [`BodyModel::pose`] gives up to float rounding.
 
-use std::collections::HashMap;
+use std::collections::BTreeMap;
 
-use glam::{Affine3A, Mat3A, Vec3};
+use glam::{Affine3A, Mat3A, Vec3, Vec3A};
 
-use super::lbs::{blend, rigid_chain, rodrigues};
+use super::lbs::{rigid_chain, rodrigues};
 use super::{BodyModel, BodyPose, Landmark, PoseError};
 
+/// One joint's share of one point.
+struct Share {
+    joint: usize,
+    /// W_j: the point's total skin weight on the joint.
+    weight: f32,
+    /// m_j: the weighted rest positions.
+    rest: Vec3,
+    /// d_jt for the targets that move the point's vertices.
+    deltas: Vec<(usize, Vec3)>,
+}
+
 pub struct PointPoser {
-    /// The mesh vertices the points use, with their rest positions.
-    vertices: Vec<u32>,
-    rest: Vec<Vec3>,
-    /// Per target: (index into `vertices`, delta) for the vertices it moves.
-    deltas: Vec<Vec<(usize, Vec3)>>,
-    /// Per point: (index into `vertices`, weight).
-    points: Vec<Vec<(usize, f32)>>,
+    points: Vec<Vec<Share>>,
     // Scratch, reused across calls.
-    morphed: Vec<Vec3>,
     rest_joints: Vec<Vec3>,
     rotations: Vec<Mat3A>,
     world: Vec<Affine3A>,
@@ -28,44 +35,50 @@ pub struct PointPoser {
 
 impl PointPoser {
     pub fn new<'a>(body: &BodyModel, points: impl IntoIterator<Item = &'a Landmark>) -> Self {
-        let mut local = HashMap::new();
-        let mut vertices = Vec::new();
-        let points: Vec<Vec<(usize, f32)>> = points
-            .into_iter()
-            .map(|p| {
-                p.vertices
-                    .iter()
-                    .zip(&p.weights)
-                    .map(|(&v, &w)| {
-                        let k = *local.entry(v).or_insert_with(|| {
-                            vertices.push(v);
-                            vertices.len() - 1
-                        });
-                        (k, w)
-                    })
-                    .collect()
-            })
-            .collect();
-        let deltas = body
-            .targets
+        let points: Vec<&Landmark> = points.into_iter().collect();
+        // Which targets move each vertex the points use, and by how much.
+        let mut moved: BTreeMap<u32, Vec<(usize, Vec3)>> = points
             .iter()
-            .map(|t| {
-                t.vertices
-                    .iter()
-                    .zip(&t.deltas)
-                    .filter_map(|(v, &d)| local.get(v).map(|&k| (k, d)))
-                    .collect()
+            .flat_map(|p| p.vertices.iter().map(|&v| (v, Vec::new())))
+            .collect();
+        for (t, target) in body.targets.iter().enumerate() {
+            for (v, &d) in target.vertices.iter().zip(&target.deltas) {
+                if let Some(list) = moved.get_mut(v) {
+                    list.push((t, d));
+                }
+            }
+        }
+        let points = points
+            .iter()
+            .map(|p| {
+                let mut shares: BTreeMap<usize, Share> = BTreeMap::new();
+                for (&v, &w) in p.vertices.iter().zip(&p.weights) {
+                    let (js, ss) = (
+                        &body.skin_joints[v as usize],
+                        &body.skin_weights[v as usize],
+                    );
+                    for (&j, &s) in js.iter().zip(ss).filter(|(_, s)| **s != 0.0) {
+                        let share = shares.entry(j as usize).or_insert_with(|| Share {
+                            joint: j as usize,
+                            weight: 0.0,
+                            rest: Vec3::ZERO,
+                            deltas: Vec::new(),
+                        });
+                        share.weight += w * s;
+                        share.rest += w * s * body.vertices[v as usize];
+                        for &(t, d) in &moved[&v] {
+                            match share.deltas.iter_mut().find(|(k, _)| *k == t) {
+                                Some((_, sum)) => *sum += w * s * d,
+                                None => share.deltas.push((t, w * s * d)),
+                            }
+                        }
+                    }
+                }
+                shares.into_values().collect()
             })
             .collect();
         Self {
-            rest: vertices
-                .iter()
-                .map(|&v| body.vertices[v as usize])
-                .collect(),
-            vertices,
-            deltas,
             points,
-            morphed: Vec::new(),
             rest_joints: Vec::new(),
             rotations: Vec::new(),
             world: Vec::new(),
@@ -83,24 +96,17 @@ impl PointPoser {
         joints: &mut Vec<Vec3>,
     ) -> Result<(), PoseError> {
         pose.check_lengths(body.joints.len(), body.targets.len())?;
-        let mut nonfinite = 0;
-        self.morphed.clone_from(&self.rest);
+        let c = |t: usize| {
+            let c = pose.coefficients[t];
+            if c.is_finite() { c } else { 0.0 }
+        };
         self.rest_joints.clear();
         self.rest_joints.extend(body.joints.iter().map(|j| j.rest));
-        for ((target, deltas), &c) in body
-            .targets
-            .iter()
-            .zip(&self.deltas)
-            .zip(&pose.coefficients)
-        {
-            if c == 0.0 || !c.is_finite() {
-                continue;
-            }
-            for &(k, d) in deltas {
-                self.morphed[k] += c * d;
-            }
-            for (j, &d) in self.rest_joints.iter_mut().zip(&target.joint_deltas) {
-                *j += c * d;
+        for (t, target) in body.targets.iter().enumerate() {
+            if c(t) != 0.0 {
+                for (j, &d) in self.rest_joints.iter_mut().zip(&target.joint_deltas) {
+                    *j += c(t) * d;
+                }
             }
         }
         let translation = if pose.translation.is_finite() {
@@ -108,6 +114,7 @@ impl PointPoser {
         } else {
             Vec3::ZERO
         };
+        let mut nonfinite = 0;
         self.rotations.clear();
         self.rotations
             .extend(pose.rotations.iter().map(|&r| rodrigues(r, &mut nonfinite)));
@@ -119,21 +126,19 @@ impl PointPoser {
             &mut self.world,
             &mut self.placements,
         );
-        for (m, &v) in self.morphed.iter_mut().zip(&self.vertices) {
-            let (js, ws) = (
-                &body.skin_joints[v as usize],
-                &body.skin_weights[v as usize],
-            );
-            let influences = js.iter().zip(ws).filter(|(_, w)| **w != 0.0);
-            let skin = blend(influences.map(|(&j, &w)| (j as usize, w)), &self.placements);
-            *m = skin.transform_point3(*m);
-        }
         points.clear();
-        points.extend(
-            self.points
-                .iter()
-                .map(|p| p.iter().map(|&(k, w)| w * self.morphed[k]).sum::<Vec3>()),
-        );
+        points.extend(self.points.iter().map(|shares| {
+            let mut p = Vec3A::ZERO;
+            for s in shares {
+                let a = &self.placements[s.joint];
+                let mut x = s.rest;
+                for &(t, d) in &s.deltas {
+                    x += c(t) * d;
+                }
+                p += a.matrix3 * Vec3A::from(x) + s.weight * a.translation;
+            }
+            Vec3::from(p)
+        }));
         joints.clear();
         joints.extend(self.world.iter().map(|w| Vec3::from(w.translation)));
         Ok(())
