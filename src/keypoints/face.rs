@@ -66,25 +66,17 @@ impl FaceLandmarker {
         source: &SourceImage,
         roi: Roi,
     ) -> Result<Option<FaceLandmarks>, OnnxError> {
-        let mut roi = roi;
-        let mut found = None;
-        for _ in 0..2 {
-            let (points, presence) = self.run(&roi.sample(source, FACE_INPUT))?;
-            if presence < MIN_PRESENCE {
-                return Ok(None);
-            }
-            let points: Vec<Vec2> = points
-                .iter()
-                .map(|p| roi.to_image(Vec2::new(p[0], p[1]), FACE_INPUT))
-                .collect();
-            let next = Roi::face_from_landmarks(&points);
-            found = Some(FaceLandmarks {
-                points,
-                presence,
-                roi,
-            });
-            roi = next;
-        }
-        Ok(found)
+        let found = roi.track(
+            source,
+            FACE_INPUT,
+            MIN_PRESENCE,
+            |x| self.run(x),
+            Roi::face_from_landmarks,
+        )?;
+        Ok(found.map(|(points, presence, roi)| FaceLandmarks {
+            points,
+            presence,
+            roi,
+        }))
     }
 }

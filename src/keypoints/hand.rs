@@ -101,28 +101,21 @@ impl HandLandmarker {
         pose: &PoseKeypoints,
         side: Side,
     ) -> Result<Option<HandLandmarks>, OnnxError> {
-        let Some(mut roi) = Roi::hand_from_pose(pose, side) else {
+        let Some(roi) = Roi::hand_from_pose(pose, side) else {
             return Ok(None);
         };
-        let mut found = None;
-        for _ in 0..2 {
-            let (points, presence) = self.run(&roi.sample(source, HAND_INPUT))?;
-            if presence < MIN_PRESENCE {
-                return Ok(None);
-            }
-            let points: Vec<Vec2> = points
-                .iter()
-                .map(|p| roi.to_image(Vec2::new(p[0], p[1]), HAND_INPUT))
-                .collect();
-            let next = Roi::hand_from_landmarks(&points);
-            found = Some(HandLandmarks {
-                side,
-                points,
-                presence,
-                roi,
-            });
-            roi = next;
-        }
-        Ok(found)
+        let found = roi.track(
+            source,
+            HAND_INPUT,
+            MIN_PRESENCE,
+            |x| self.run(x),
+            Roi::hand_from_landmarks,
+        )?;
+        Ok(found.map(|(points, presence, roi)| HandLandmarks {
+            side,
+            points,
+            presence,
+            roi,
+        }))
     }
 }

@@ -5,6 +5,7 @@
 use glam::{Vec2, Vec3};
 
 use super::{FACE_EYE_CORNERS, Keypoint, PoseKeypoints, Side};
+use crate::onnx::OnnxError;
 use crate::reconstruct::SourceImage;
 use crate::reconstruct::fill::bilinear_clamped;
 
@@ -79,7 +80,12 @@ impl Roi {
     /// points' bounding box in that frame, its longer side times the margin.
     pub fn face_from_landmarks(points: &[Vec2]) -> Self {
         let across = points[FACE_EYE_CORNERS.1] - points[FACE_EYE_CORNERS.0];
-        let angle = across.y.atan2(across.x);
+        Self::around(points, across.y.atan2(across.x), FACE_MARGIN)
+    }
+
+    /// The crop at `angle` around `points`: their bounding box in that frame, its longer side
+    /// times `margin`.
+    fn around(points: &[Vec2], angle: f32, margin: f32) -> Self {
         let to_crop = Vec2::from_angle(-angle);
         let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
         for &p in points {
@@ -90,9 +96,38 @@ impl Roi {
         let extent = hi - lo;
         Self {
             centre: Vec2::from_angle(angle).rotate(0.5 * (lo + hi)),
-            side: FACE_MARGIN * extent.x.max(extent.y),
+            side: margin * extent.x.max(extent.y),
             angle,
         }
+    }
+
+    /// A landmark model's answer in this crop, then in the crop that answer places (as
+    /// MediaPipe's tracking does between frames). `run` maps an `n`² input to points in input
+    /// pixels and a presence; below `min_presence` the crop holds nothing and `None` comes back.
+    pub(super) fn track(
+        self,
+        source: &SourceImage,
+        n: usize,
+        min_presence: f32,
+        mut run: impl FnMut(&[f32]) -> Result<(Vec<[f32; 3]>, f32), OnnxError>,
+        recrop: fn(&[Vec2]) -> Self,
+    ) -> Result<Option<(Vec<Vec2>, f32, Self)>, OnnxError> {
+        let mut roi = self;
+        let mut found = None;
+        for _ in 0..2 {
+            let (points, presence) = run(&roi.sample(source, n))?;
+            if presence < min_presence {
+                return Ok(None);
+            }
+            let points: Vec<Vec2> = points
+                .iter()
+                .map(|p| roi.to_image(Vec2::new(p[0], p[1]), n))
+                .collect();
+            let next = recrop(&points);
+            found = Some((points, presence, roi));
+            roi = next;
+        }
+        Ok(found)
     }
 
     /// The `side` hand's crop from the pose model's wrist, pinky and index points, rotated so the
@@ -117,21 +152,8 @@ impl Roi {
     /// The crop around a hand's 21 points: wrist to middle knuckle pointing up, the points'
     /// bounding box in that frame, its longer side times the margin.
     pub fn hand_from_landmarks(points: &[Vec2]) -> Self {
-        let up = points[9] - points[0];
-        let frame = Self::upright(Vec2::ZERO, 1.0, up);
-        let to_crop = Vec2::from_angle(-frame.angle);
-        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
-        for &p in points {
-            let q = to_crop.rotate(p);
-            lo = lo.min(q);
-            hi = hi.max(q);
-        }
-        let extent = hi - lo;
-        Self {
-            centre: Vec2::from_angle(frame.angle).rotate(0.5 * (lo + hi)),
-            side: HAND_MARGIN * extent.x.max(extent.y),
-            angle: frame.angle,
-        }
+        let up = Self::upright(Vec2::ZERO, 1.0, points[9] - points[0]);
+        Self::around(points, up.angle, HAND_MARGIN)
     }
 
     /// A crop whose up (−y) points along `up` in the image.
