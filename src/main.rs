@@ -91,9 +91,14 @@ enum Command {
         /// The avatar file to write (.guava).
         #[arg(long)]
         out: PathBuf,
+        /// Keypoint models from this folder instead of the shipped ones (same file names and
+        /// inputs and outputs as assets/models/).
+        #[arg(long)]
+        keypoint_models: Option<PathBuf>,
     },
-    /// Fit the default body's pose and GUAVA's camera to a photo's body keypoints (MediaPipe pose
-    /// landmarks through ONNX Runtime) and write them as a tracking file.
+    /// Fit the default body's pose, shape, expression and fingers and GUAVA's camera to a photo's
+    /// body, face and hand keypoints (MediaPipe's models through ONNX Runtime) and write them as a
+    /// tracking file.
     Fit {
         #[arg(long)]
         image: PathBuf,
@@ -103,6 +108,10 @@ enum Command {
         /// fitted body puts them (red), twice the size, as PNG.
         #[arg(long)]
         overlay: Option<PathBuf>,
+        /// Keypoint models from this folder instead of the shipped ones (same file names and
+        /// inputs and outputs as assets/models/).
+        #[arg(long)]
+        keypoint_models: Option<PathBuf>,
     },
     /// Benchmarks (print a table).
     Bench {
@@ -200,12 +209,20 @@ fn run(cli: Cli) -> Result<()> {
             tracking,
             fit: force_fit,
             out,
-        } => reconstruct(&image, tracking.as_deref(), force_fit, &out),
+            keypoint_models,
+        } => reconstruct(
+            &image,
+            tracking.as_deref(),
+            force_fit,
+            &out,
+            keypoint_models.as_deref(),
+        ),
         Command::Fit {
             image,
             out,
             overlay,
-        } => fit(&image, &out, overlay.as_deref()),
+            keypoint_models,
+        } => fit(&image, &out, overlay.as_deref(), keypoint_models.as_deref()),
         Command::Motion { file, out, ehm } => motion(&file, out.as_deref(), ehm.as_deref()),
         Command::Bench { which } => match which {
             Bench::Splat(args) => guava::bench::splat(&args),
@@ -273,10 +290,14 @@ fn synth_photo(out: &Path, yaw: f32) -> Result<()> {
     Ok(())
 }
 
-/// The keypoint models on the installed ONNX Runtime.
-fn landmarkers() -> Result<guava::keypoints::Landmarkers> {
+/// The keypoint models (shipped, or from `dir`) on the installed ONNX Runtime.
+fn landmarkers(dir: Option<&Path>) -> Result<guava::keypoints::Landmarkers> {
+    use guava::keypoints::{Landmarkers, MODELS_DIR};
     let runtime = guava::onnx::OnnxRuntime::load()?;
-    Ok(guava::keypoints::Landmarkers::load(runtime)?)
+    Ok(Landmarkers::load_dir(
+        runtime,
+        dir.unwrap_or(Path::new(MODELS_DIR)),
+    )?)
 }
 
 /// One line on the fit, and one on its face stage.
@@ -308,7 +329,13 @@ fn print_fit(f: &guava::fit::FitReport) {
     }
 }
 
-fn reconstruct(image: &Path, tracking: Option<&Path>, fit: bool, out: &Path) -> Result<()> {
+fn reconstruct(
+    image: &Path,
+    tracking: Option<&Path>,
+    fit: bool,
+    out: &Path,
+    models: Option<&Path>,
+) -> Result<()> {
     use guava::reconstruct::{
         DEFAULT_UV_SIZE, MaskSource, Tracked, UvMap, reconstruct_photo_file, tracking_beside,
     };
@@ -322,7 +349,7 @@ fn reconstruct(image: &Path, tracking: Option<&Path>, fit: bool, out: &Path) -> 
         None => Tracked::Fit,
     };
     // The pose model gives the mask of a photo without alpha, and the fit; optional otherwise.
-    let mut model = match (&tracked, landmarkers()) {
+    let mut model = match (&tracked, landmarkers(models)) {
         (_, Ok(m)) => Some(m),
         (Tracked::Fit, Err(e)) => return Err(e.context("fitting the photo needs the pose model")),
         (Tracked::File(_) | Tracked::Given(_), Err(e)) => {
@@ -370,11 +397,11 @@ fn reconstruct(image: &Path, tracking: Option<&Path>, fit: bool, out: &Path) -> 
 }
 
 /// Fits the default body to a photo's keypoints and writes the result as a tracking file.
-fn fit(image: &Path, out: &Path, overlay: Option<&Path>) -> Result<()> {
+fn fit(image: &Path, out: &Path, overlay: Option<&Path>, models: Option<&Path>) -> Result<()> {
     use guava::reconstruct::SourceImage;
     let body = guava::body::BodyModel::default_body()?;
     let source = SourceImage::load(image)?;
-    let mut models = landmarkers()?;
+    let mut models = landmarkers(models)?;
     let t0 = std::time::Instant::now();
     let found = models.detect(&source)?;
     let t1 = std::time::Instant::now();

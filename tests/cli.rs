@@ -136,3 +136,57 @@ fn motion_reports_what_the_default_body_takes_and_converts() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `guava fit` end to end on the demo portrait, and a keypoint-model folder of one's own: the
+/// shipped models copied there fit alike; a folder missing some is one error naming them, and
+/// no tracking file is written.
+#[test]
+fn fit_writes_tracking_and_takes_a_model_folder() {
+    let dir = std::env::temp_dir().join(format!("guava-cli-fit-{}", std::process::id()));
+    let models = dir.join("models");
+    std::fs::create_dir_all(&models).expect("dir");
+    let portrait = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/demo_portrait.png");
+    let out = dir.join("fit.json");
+    let out_s = out.to_str().expect("utf-8");
+    let models_s = models.to_str().expect("utf-8");
+    std::fs::copy(
+        format!("{}/face_landmark.onnx", guava::keypoints::MODELS_DIR),
+        models.join("face_landmark.onnx"),
+    )
+    .expect("copy");
+    let (ok, _, stderr) = guava(&[
+        "fit",
+        "--image",
+        portrait,
+        "--out",
+        out_s,
+        "--keypoint-models",
+        models_s,
+    ]);
+    assert!(!ok && !out.exists());
+    assert!(
+        stderr.contains("lacks pose_landmark_full.onnx, hand_landmark_full.onnx"),
+        "{stderr}"
+    );
+    for f in guava::keypoints::MODEL_FILES {
+        std::fs::copy(
+            format!("{}/{f}", guava::keypoints::MODELS_DIR),
+            models.join(f),
+        )
+        .expect("copy");
+    }
+    let (ok, stdout, stderr) = guava(&[
+        "fit",
+        "--image",
+        portrait,
+        "--out",
+        out_s,
+        "--keypoint-models",
+        models_s,
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("103 face-mesh points"), "{stdout}");
+    let fitted = guava::tracking::Tracking::load(&out).expect("a valid tracking file");
+    assert_eq!(fitted.frames.len(), 1);
+    std::fs::remove_dir_all(&dir).ok();
+}

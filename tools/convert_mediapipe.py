@@ -7,7 +7,8 @@ Needs (not in CI; a throw-away venv of ~1.7 GB):
     pip download --no-deps scikit-image==0.25.2 -d target/skimage
     python tools/convert_mediapipe.py --skimage-wheel target/skimage/scikit_image-0.25.2-*.whl
 
-Writes:
+Writes (tf2onnx's bytes differ from run to run, names in the graph, while the numbers do not:
+keep the committed model files unless the conversion itself changes):
 - assets/models/pose_landmark_full.onnx: MediaPipe `pose_landmark_full.tflite` (Apache-2.0, from
   the mediapipe 0.10.21 wheel) through tf2onnx, opset 17. Input [1,256,256,3] RGB in [0, 1];
   outputs 39×5 landmarks (x, y, z in input pixels, visibility and presence logits), the pose

@@ -17,6 +17,8 @@ pub use hand::{HAND_INPUT, HAND_MODEL_PATH, HAND_POINTS, HandLandmarker, HandLan
 pub use pose::{COCO_FROM_MEDIAPIPE, POSE_INPUT, POSE_MODEL_PATH, PoseKeypoints, PoseLandmarker};
 pub use roi::Roi;
 
+use std::path::Path;
+
 use glam::Vec2;
 
 use crate::onnx::{OnnxError, OnnxRuntime};
@@ -42,7 +44,15 @@ pub struct Detections {
     pub hands: Vec<HandLandmarks>,
 }
 
-/// The shipped keypoint models, loaded once and run on each photo.
+/// Where the shipped models are, and the file names [`Landmarkers::load_dir`] looks for.
+pub const MODELS_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/models");
+pub const MODEL_FILES: [&str; 3] = [
+    "pose_landmark_full.onnx",
+    "face_landmark.onnx",
+    "hand_landmark_full.onnx",
+];
+
+/// The keypoint models, loaded once and run on each photo.
 pub struct Landmarkers {
     pub pose: PoseLandmarker,
     pub face: FaceLandmarker,
@@ -50,11 +60,31 @@ pub struct Landmarkers {
 }
 
 impl Landmarkers {
+    /// The shipped models.
     pub fn load(runtime: &OnnxRuntime) -> Result<Self, OnnxError> {
+        Self::load_dir(runtime, Path::new(MODELS_DIR))
+    }
+
+    /// Models from a folder, under [`MODEL_FILES`]' names and with the shipped models' inputs
+    /// and outputs (a user's own conversions or retrained models). Missing files are listed in
+    /// one error; each file is checked for its model's inputs and outputs.
+    pub fn load_dir(runtime: &OnnxRuntime, dir: &Path) -> Result<Self, OnnxError> {
+        let missing: Vec<&str> = MODEL_FILES
+            .iter()
+            .copied()
+            .filter(|f| !dir.join(f).is_file())
+            .collect();
+        if !missing.is_empty() {
+            return Err(OnnxError::Model {
+                path: dir.to_path_buf(),
+                reason: format!("the keypoint model folder lacks {}", missing.join(", ")),
+            });
+        }
+        let [pose, face, hand] = MODEL_FILES.map(|f| dir.join(f));
         Ok(Self {
-            pose: PoseLandmarker::load(runtime)?,
-            face: FaceLandmarker::load(runtime)?,
-            hand: HandLandmarker::load(runtime)?,
+            pose: PoseLandmarker::load_from(runtime, &pose)?,
+            face: FaceLandmarker::load_from(runtime, &face)?,
+            hand: HandLandmarker::load_from(runtime, &hand)?,
         })
     }
 
