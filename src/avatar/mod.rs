@@ -5,8 +5,9 @@
 //! - *UV Gaussians*, one per kept UV texel: bound to a triangle by barycentrics, with an offset,
 //!   rotation and scale in that triangle's frame, so they ride the posed surface.
 //!
-//! Reconstruction makes one ([`crate::reconstruct`]); [`animate`] turns it into a
-//! [`GaussianCloud`] for any pose of its body; [`file`] saves and loads it bit-identically.
+//! Reconstruction makes one ([`crate::reconstruct`]); [`Rig`] turns it into a
+//! [`GaussianCloud`](crate::gaussians::GaussianCloud) for any pose of its body; the `.guava` file
+//! saves and loads it bit-identically.
 
 mod animate;
 pub mod file;

@@ -1,17 +1,18 @@
-//! Single-image fitting: the camera, body pose, shape and facial expression of the default body
-//! that put its landmarks on a photo's 2D keypoints (Levenberg–Marquardt with priors, in Rust).
+//! Single-image fitting: the camera, body pose, shape, facial expression and fingers of the
+//! default body that put its points on a photo's 2D keypoints (Levenberg–Marquardt with priors).
 //!
-//! Two stages. **Body:** the global orientation (root axis-angle), the camera translation
-//! (GUAVA's camera: `invtanfov` 24, looking at the body's front, so its distance sets the scale),
-//! the rotations of [`FITTED_JOINTS`] and the shape coefficients (kept within their ranges),
-//! against the pose model's body keypoints. **Face**, when the face model found a face: the head
-//! and neck rotations and the [`FITTED_EXPRESSIONS`] (within their ranges; the default body's
-//! expressions are the 52 ARKit face units, jaw opening included), against the face mesh's points on the body
-//! ([`FaceEmbedding`]) with the body keypoints kept in. Residuals are reprojection errors in
-//! pixels, weighted by √confidence; priors pull joints to rest at [`PRIOR_PX_PER_RAD`] pixels per
-//! radian, shape to the default at [`SHAPE_PRIOR_PX`] and expressions to neutral at
-//! [`EXPRESSION_PRIOR_PER_EYE_SPAN`] per unit, so what no keypoint constrains stays
-//! put.
+//! Three stages, each posing only the points it observes ([`PointPoser`]). **Body:** the global
+//! orientation (root axis-angle), the camera translation (GUAVA's camera: `invtanfov` 24, looking
+//! at the body's front, so its distance sets the scale), the rotations of [`FITTED_JOINTS`] and
+//! the shape coefficients (within their ranges), against the pose model's body keypoints.
+//! **Face**, when the face model found a face: head and neck, the [`FITTED_EXPRESSIONS`], the
+//! head's size ([`HEAD_SIZE`]) and a small image offset per facial feature, against the face
+//! mesh's points on the body ([`FaceEmbedding`]), the body keypoints kept in. **Hands**, for each
+//! hand found: forearm, wrist and fingers against its 21 points ([`hand_targets`]). Residuals are
+//! reprojection errors in pixels, weighted by √confidence; priors pull joints to rest at
+//! [`PRIOR_PX_PER_RAD`] pixels per radian, shape to the default at [`SHAPE_PRIOR_PX`],
+//! expressions to neutral at [`EXPRESSION_PRIOR_PER_EYE_SPAN`] per unit and fingers to rest in
+//! proportion to the palm, so what no keypoint constrains stays put.
 
 mod face;
 mod hand;

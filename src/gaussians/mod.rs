@@ -1,5 +1,5 @@
 //! A cloud of 3D Gaussians with C feature channels: what reconstruction produces, rigging moves and
-//! the splatting pass draws. Attributes are stored activated (linear scale, opacity in [0,1]).
+//! the splatting pass draws. Attributes are stored activated (linear scale, opacity in \[0, 1\]).
 
 pub mod ply;
 pub mod synthetic;

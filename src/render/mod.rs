@@ -1,5 +1,5 @@
 //! Gaussian splatting: the wgpu pass ([`splatter`]), the f64 CPU reference it is tested against
-//! ([`reference`]), and the present pass that shows the output in a window ([`present`]).
+//! ([`reference`](mod@reference)), and the present pass that shows the output in a window ([`present`]).
 
 pub mod layout;
 pub mod mesh;

@@ -1,7 +1,7 @@
 //! Motion files from other tools, turned into [`Tracking`]:
 //! - ARKit-52 blendshape CSV as written by face-capture apps (Live Link Face: `Timecode,
 //!   BlendShapeCount, EyeBlinkLeft, …`), for the default body's ARKit face;
-//! - SMPL-X parameter `.npz` files: AMASS (`poses` [N,165] or SMPL-H [N,156], `trans`, `betas`,
+//! - SMPL-X parameter `.npz` files: AMASS (`poses` \[N,165\] or SMPL-H \[N,156\], `trans`, `betas`,
 //!   `mocap_frame_rate`; z-up, turned to y-up) or per-part fits (`global_orient`, `body_pose`,
 //!   `jaw_pose`, `leye_pose`, `reye_pose`, `left/right_hand_pose`, `transl`, `expression`, `betas`).
 //!
