@@ -149,12 +149,7 @@ fn fit_writes_tracking_and_takes_a_model_folder() {
     let out = dir.join("fit.json");
     let out_s = out.to_str().expect("utf-8");
     let models_s = models.to_str().expect("utf-8");
-    std::fs::copy(
-        format!("{}/face_landmark.onnx", guava::keypoints::MODELS_DIR),
-        models.join("face_landmark.onnx"),
-    )
-    .expect("copy");
-    let (ok, _, stderr) = guava(&[
+    let fit = [
         "fit",
         "--image",
         portrait,
@@ -162,7 +157,13 @@ fn fit_writes_tracking_and_takes_a_model_folder() {
         out_s,
         "--keypoint-models",
         models_s,
-    ]);
+    ];
+    std::fs::copy(
+        format!("{}/face_landmark.onnx", guava::keypoints::MODELS_DIR),
+        models.join("face_landmark.onnx"),
+    )
+    .expect("copy");
+    let (ok, _, stderr) = guava(&fit);
     assert!(!ok && !out.exists());
     assert!(
         stderr.contains("lacks pose_landmark_full.onnx, hand_landmark_full.onnx"),
@@ -175,15 +176,7 @@ fn fit_writes_tracking_and_takes_a_model_folder() {
         )
         .expect("copy");
     }
-    let (ok, stdout, stderr) = guava(&[
-        "fit",
-        "--image",
-        portrait,
-        "--out",
-        out_s,
-        "--keypoint-models",
-        models_s,
-    ]);
+    let (ok, stdout, stderr) = guava(&fit);
     assert!(ok, "{stderr}");
     assert!(stdout.contains("103 face-mesh points"), "{stdout}");
     let fitted = guava::tracking::Tracking::load(&out).expect("a valid tracking file");

@@ -43,6 +43,13 @@ fn fixture(name: &str) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(data(name)).expect("fixture")).expect("json")
 }
 
+/// The crop of points projected exactly (no model ran, so no crop).
+const EXACT: Roi = Roi {
+    centre: Vec2::ZERO,
+    side: 1.0,
+    angle: 0.0,
+};
+
 fn data(name: &str) -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(name)
 }
@@ -406,11 +413,7 @@ fn face_fit_recovers_a_known_expression() {
     let face = FaceLandmarks {
         points,
         presence: 1.0,
-        roi: Roi {
-            centre: Vec2::ZERO,
-            side: 1.0,
-            angle: 0.0,
-        },
+        roi: EXACT,
     };
     let input = FitInput {
         keypoints: &keypoints,
@@ -531,11 +534,7 @@ fn hand_fit_recovers_known_fingers() {
         side: Side::Right,
         points,
         presence: 1.0,
-        roi: Roi {
-            centre: Vec2::ZERO,
-            side: 1.0,
-            angle: 0.0,
-        },
+        roi: EXACT,
     };
     let input = FitInput {
         keypoints: &keypoints,

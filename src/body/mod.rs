@@ -124,6 +124,12 @@ impl BodyModel {
             .collect()
     }
 
+    /// The body-part name of vertex `v` (`None` when the template has no part labels).
+    pub fn part_of(&self, v: usize) -> Option<&str> {
+        let &p = self.vertex_parts.get(v)?;
+        self.part_names.get(p as usize).map(String::as_str)
+    }
+
     /// Targets of one group, with their indices into [`BodyModel::targets`].
     pub fn targets_in(&self, group: TargetGroup) -> impl Iterator<Item = (usize, &MorphTarget)> {
         self.targets

@@ -58,13 +58,14 @@ pub struct FaceEmbedding {
 /// Shades the rest body's face from the front, runs the face model on it and maps each used
 /// point back onto the surface.
 pub fn embed_face(body: &BodyModel, model: &mut FaceLandmarker) -> Result<FaceEmbedding, FitError> {
+    let rest = body.landmark_positions(&body.vertices);
     let landmark = |name: &str| {
         let l = body
             .landmarks
             .iter()
             .position(|l| l.name == name)
             .ok_or_else(|| FitError::MissingOnBody(name.into()))?;
-        Ok::<_, FitError>(body.landmark_positions(&body.vertices)[l])
+        Ok::<_, FitError>(rest[l])
     };
     let (left, right, nose) = (
         landmark("left_eye")?,
@@ -134,12 +135,8 @@ fn shade(body: &BodyModel, f: &Fragments, light: Vec3) -> Vec<f32> {
                     .iter()
                     .enumerate()
                     .fold(0, |m, (k, &v)| if v > b[m] { k } else { m })];
-                let part = body
-                    .vertex_parts
-                    .get(corner as usize)
-                    .and_then(|&p| body.part_names.get(p as usize))
-                    .map(String::as_str);
-                albedo(part) * (0.3 + 0.7 * normal.normalize_or_zero().dot(light).max(0.0))
+                albedo(body.part_of(corner as usize))
+                    * (0.3 + 0.7 * normal.normalize_or_zero().dot(light).max(0.0))
             };
             let o = ((y / s) * n + x / s) * 3;
             for c in 0..3 {
@@ -154,11 +151,9 @@ fn shade(body: &BodyModel, f: &Fragments, light: Vec3) -> Vec<f32> {
 /// margins, which move with blinks and smiles, while the eyeballs and the mouth's inside do not.
 fn is_skin(body: &BodyModel, triangle: [u32; 3]) -> bool {
     triangle.iter().all(|&v| {
-        let part = body
-            .vertex_parts
-            .get(v as usize)
-            .and_then(|&p| body.part_names.get(p as usize));
-        !part.is_some_and(|p| p.starts_with("eye") || p == "mouth_cavity" || p == "tongue")
+        !body
+            .part_of(v as usize)
+            .is_some_and(|p| p.starts_with("eye") || p == "mouth_cavity" || p == "tongue")
     })
 }
 

@@ -231,7 +231,8 @@ struct Stage<'a> {
     observations: Vec<(Target, Vec2, f64)>,
     /// Per observation: the face feature it belongs to, if any.
     features: Vec<Option<usize>>,
-    projected: Vec<Vec2>,
+    /// Scratch: each observation's projected pixel.
+    pixels: Vec<Vec2>,
     /// Each unknown with its prior weight (pixels per unit away from zero).
     unknowns: Vec<(Unknown, f64)>,
     /// Pairs of morph targets that pay `weight · a · b` for acting together.
@@ -258,7 +259,7 @@ impl Stage<'_> {
             .pose(self.body, &s.pose, &mut self.points, &mut self.joints);
         let camera = camera_for(s.camera, self.side);
         let mut ok = posed.is_ok();
-        self.projected.clear();
+        self.pixels.clear();
         for &(target, _, _) in &self.observations {
             let x = match target {
                 Target::Point(i) => self.points[i],
@@ -266,14 +267,14 @@ impl Stage<'_> {
             };
             let q = camera.project(x);
             ok &= q.z > 0.0 && q.is_finite();
-            self.projected.push(Vec2::new(q.x, q.y));
+            self.pixels.push(Vec2::new(q.x, q.y));
         }
-        for (q, &feature) in self.projected.iter_mut().zip(&self.features) {
+        for (q, &feature) in self.pixels.iter_mut().zip(&self.features) {
             if let Some(g) = feature {
                 *q += s.feature_offsets[g];
             }
         }
-        for (q, &(_, observed, w)) in self.projected.iter().zip(&self.observations) {
+        for (q, &(_, observed, w)) in self.pixels.iter().zip(&self.observations) {
             for (a, b) in [(q.x, observed.x), (q.y, observed.y)] {
                 out.push(if ok { w * (a - b) as f64 } else { 1e4 });
             }
@@ -313,7 +314,7 @@ impl Stage<'_> {
         let mut r = Vec::new();
         self.residuals(&[], &mut r);
         self.base = saved;
-        self.projected[range].to_vec()
+        self.pixels[range].to_vec()
     }
 
     /// Unweighted RMS pixel error of the observations in `state`.
@@ -469,7 +470,7 @@ pub fn fit_keypoints(
         unknowns,
         antagonists: Vec::new(),
         features: vec![None; body_observed],
-        projected: Vec::new(),
+        pixels: Vec::new(),
         base: start,
         points: Vec::new(),
         joints: Vec::new(),
