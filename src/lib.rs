@@ -11,6 +11,7 @@ pub mod camera;
 pub mod fit;
 pub mod gaussians;
 pub mod gpu;
+pub mod guava_mode;
 pub mod keypoints;
 pub mod npz;
 pub mod onnx;

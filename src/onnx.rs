@@ -173,6 +173,21 @@ impl Session {
             .collect()
     }
 
+    /// Each input's name and shape (−1 where a dimension is not fixed).
+    pub fn input_shapes(&self) -> Vec<(String, Vec<i64>)> {
+        shapes(self.inner.inputs())
+    }
+
+    /// Each output's name and shape (−1 where a dimension is not fixed).
+    pub fn output_shapes(&self) -> Vec<(String, Vec<i64>)> {
+        shapes(self.inner.outputs())
+    }
+
+    /// A value of the model's custom metadata (`metadata_props`), if it has that key.
+    pub fn metadata(&self, key: &str) -> Option<String> {
+        self.inner.metadata().ok()?.custom(key)
+    }
+
     /// Runs the model on named inputs and returns every output in the model's order.
     pub fn run(&mut self, inputs: Vec<(&str, TensorF32)>) -> Result<Vec<TensorF32>, OnnxError> {
         let run_err = |e: ort::Error| OnnxError::Run {
@@ -199,6 +214,19 @@ impl Session {
         }
         Ok(result)
     }
+}
+
+fn shapes(outlets: &[ort::value::Outlet]) -> Vec<(String, Vec<i64>)> {
+    outlets
+        .iter()
+        .map(|o| {
+            let shape = match o.dtype() {
+                ort::value::ValueType::Tensor { shape, .. } => shape.iter().copied().collect(),
+                _ => Vec::new(),
+            };
+            (o.name().to_string(), shape)
+        })
+        .collect()
 }
 
 /// ONNX Runtime's build info carries no release number, so read it from the library's real file
