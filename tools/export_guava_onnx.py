@@ -164,17 +164,11 @@ def reduce_dino_head(dino, vit_dim, dims, hidden):
     dino.layer_rn = nn.ModuleList(nn.Conv2d(d + 3, hidden, 3, 1, 1, bias=False) for d in dims)
 
 
-def harmonic(x):
-    """pytorch3d HarmonicEmbedding(4) (omega_0 = 1, logspace, append_input): [sin ‖ cos ‖ x]."""
-    import torch
-
-    e = (x[..., None] * (2.0 ** torch.arange(4, dtype=x.dtype))).reshape(*x.shape[:-1], -1)
-    return torch.cat([e.sin(), e.cos(), x], dim=-1)
-
-
 def wrappers(net, cfg):
     import torch
     import torch.nn as nn
+
+    harmonic = reference_env.harmonic_embedding(4)
 
     class Encoder(nn.Module):
         def __init__(self):

@@ -5,6 +5,10 @@ body-model path touches get faithful stand-ins (notes/guava-pipeline.md section 
 - `pytorch3d.io.load_obj`: only `faces.textures_idx` and `aux.verts_uvs` are read (FLAME masks).
 - `pytorch3d.structures.Meshes(...).laplacian_packed()`: a training regulariser stored as an unused
   non-persistent buffer; the stand-in returns a 1x1 zero instead of a dense 10595^2 matrix.
+- `pytorch3d.renderer.implicit.harmonic_embedding.HarmonicEmbedding`: the formula itself.
+- the renderer classes `utils/graphics_utils.py` imports, `open3d` and the CUDA splatter
+  `diff_gaussian_rasterization_32`: names only (importing works; instantiating one says it is a
+  stand-in), since the paths we run (EHM, the decoders, `Ubody_Gaussian.forward`) never use them.
 
 Needs PyTorch (CPU), numpy, opencv-python-headless and pyyaml. Nothing here is imported by the Rust
 build or CI.
@@ -58,16 +62,57 @@ class _Meshes:
         return torch.zeros(1, 1).to_sparse()
 
 
+class _Unavailable:
+    """Names the reference imports from pytorch3d's renderer (base classes, settings) but never
+    instantiates on the paths we run; using one says so instead of failing obscurely."""
+
+    def __init__(self, *args, **kwargs):
+        raise NotImplementedError(f"{type(self).__name__} is a pytorch3d stand-in")
+
+
+def harmonic_embedding(n_harmonic_functions):
+    """pytorch3d HarmonicEmbedding(n) with its defaults (omega_0 = 1, logspace, append_input):
+    x -> [sin(x_d 2^i) ‖ cos(x_d 2^i) ‖ x], d-major then frequency (notes section 7)."""
+    import torch
+
+    def embed(x):
+        freqs = 2.0 ** torch.arange(n_harmonic_functions, dtype=x.dtype)
+        e = (x[..., None] * freqs).reshape(*x.shape[:-1], -1)
+        return torch.cat([e.sin(), e.cos(), x], dim=-1)
+
+    return embed
+
+
 def install_pytorch3d_stand_ins():
     root = types.ModuleType("pytorch3d")
     io = types.ModuleType("pytorch3d.io")
     io.load_obj = _load_obj
     structures = types.ModuleType("pytorch3d.structures")
     structures.Meshes = _Meshes
-    root.io, root.structures = io, structures
-    sys.modules.update(
-        {"pytorch3d": root, "pytorch3d.io": io, "pytorch3d.structures": structures}
-    )
+    renderer = types.ModuleType("pytorch3d.renderer")
+    for name in ["CamerasBase", "RasterizationSettings", "PointLights", "TexturesVertex",
+                 "BlendParams", "TexturesUV", "SoftPhongShader", "MeshRasterizer", "MeshRenderer"]:
+        setattr(renderer, name, type(name, (_Unavailable,), {}))
+    rasterizer = types.ModuleType("pytorch3d.renderer.mesh.rasterizer")
+    rasterizer.Fragments = type("Fragments", (_Unavailable,), {})
+    rasterizer.rasterize_meshes = _Unavailable
+    harmonic = types.ModuleType("pytorch3d.renderer.implicit.harmonic_embedding")
+    harmonic.HarmonicEmbedding = harmonic_embedding
+    # The CUDA splatting extension (GPU build only; models/UbodyAvatar/gaussian_render.py).
+    splatter = types.ModuleType("diff_gaussian_rasterization_32")
+    for name in ["GaussianRasterizationSettings", "GaussianRasterizer_32"]:
+        setattr(splatter, name, type(name, (_Unavailable,), {}))
+    root.io, root.structures, root.renderer = io, structures, renderer
+    sys.modules.update({
+        "pytorch3d": root, "pytorch3d.io": io, "pytorch3d.structures": structures,
+        "pytorch3d.renderer": renderer, "pytorch3d.renderer.mesh": types.ModuleType("mesh"),
+        "pytorch3d.renderer.mesh.rasterizer": rasterizer,
+        "pytorch3d.renderer.implicit": types.ModuleType("implicit"),
+        "pytorch3d.renderer.implicit.harmonic_embedding": harmonic,
+        # open3d only writes point-cloud PLYs (ubody_gaussian.py export paths).
+        "open3d": types.ModuleType("open3d"),
+        "diff_gaussian_rasterization_32": splatter,
+    })
 
 
 def import_guava(guava_root):
