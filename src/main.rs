@@ -95,6 +95,13 @@ enum Command {
         /// inputs and outputs as assets/models/).
         #[arg(long)]
         keypoint_models: Option<PathBuf>,
+        /// GUAVA mode: the folder of GUAVA's networks as exported by
+        /// tools/export_guava_onnx.py (needs --ehm and a tracking file of that body).
+        #[arg(long, requires = "ehm", conflicts_with = "fit")]
+        guava_models: Option<PathBuf>,
+        /// GUAVA mode: the EHM body (tools/convert_ehm.py).
+        #[arg(long, requires = "guava_models")]
+        ehm: Option<PathBuf>,
     },
     /// Fit the default body's pose, shape, expression and fingers and GUAVA's camera to a photo's
     /// body, face and hand keypoints (MediaPipe's models through ONNX Runtime) and write them as a
@@ -128,6 +135,8 @@ enum Bench {
     Body(guava::bench::BodyBenchArgs),
     /// Default reconstruction of a synthetic photo, per stage, and animating the avatar.
     Reconstruct(guava::bench::ReconstructBenchArgs),
+    /// GUAVA mode's reconstruction with a folder of exported models, per stage.
+    Guava(guava::bench::GuavaBenchArgs),
 }
 
 fn main() {
@@ -210,13 +219,25 @@ fn run(cli: Cli) -> Result<()> {
             fit: force_fit,
             out,
             keypoint_models,
-        } => reconstruct(
-            &image,
-            tracking.as_deref(),
-            force_fit,
-            &out,
-            keypoint_models.as_deref(),
-        ),
+            guava_models,
+            ehm,
+        } => match (guava_models, ehm) {
+            (Some(models), Some(ehm)) => reconstruct_guava(
+                &image,
+                tracking.as_deref(),
+                &models,
+                &ehm,
+                &out,
+                keypoint_models.as_deref(),
+            ),
+            _ => reconstruct(
+                &image,
+                tracking.as_deref(),
+                force_fit,
+                &out,
+                keypoint_models.as_deref(),
+            ),
+        },
         Command::Fit {
             image,
             out,
@@ -228,6 +249,7 @@ fn run(cli: Cli) -> Result<()> {
             Bench::Splat(args) => guava::bench::splat(&args),
             Bench::Body(args) => guava::bench::body(&args),
             Bench::Reconstruct(args) => guava::bench::reconstruct(&args),
+            Bench::Guava(args) => guava::bench::guava(&args),
         },
     }
 }
@@ -393,6 +415,60 @@ fn reconstruct(
         println!("  {:32} {:8.1} ms", stage.name(), d.as_secs_f64() * 1e3);
     }
     println!("  {:32} {:8.1} ms", "total", total * 1e3);
+    Ok(())
+}
+
+/// GUAVA mode: the learned reconstruction with exported networks on an EHM body.
+fn reconstruct_guava(
+    image: &Path,
+    tracking: Option<&Path>,
+    models: &Path,
+    ehm: &Path,
+    out: &Path,
+    keypoint_models: Option<&Path>,
+) -> Result<()> {
+    use guava::guava_mode::{GuavaModels, reconstruct_guava_file, uv_map};
+    let t0 = std::time::Instant::now();
+    let mut models = GuavaModels::load_dir(guava::onnx::OnnxRuntime::load()?, models)?;
+    let body = guava::body::EhmModel::load(ehm)?;
+    let uv = uv_map(&body, models.dims.uv as u32);
+    eprintln!(
+        "  GUAVA models ({}) and body {:?} loaded in {:.1} s",
+        models.source,
+        body.name,
+        t0.elapsed().as_secs_f64()
+    );
+    let beside = guava::reconstruct::tracking_beside(image);
+    let tracking = tracking.unwrap_or(&beside);
+    let mut landmarkers = landmarkers(keypoint_models).ok();
+    let (avatar, report) = reconstruct_guava_file(
+        &mut models,
+        &body,
+        &uv,
+        image,
+        tracking,
+        landmarkers.as_mut(),
+        &mut |stage| {
+            eprintln!("  {}…", stage.name());
+            true
+        },
+    )?;
+    avatar.save(out)?;
+    println!(
+        "{}: {} ({} template + {} UV Gaussians, {} channels; {} texels, {} on visible faces, {} pruned) → {}",
+        image.display(),
+        avatar.kind.label(),
+        avatar.template.len(),
+        avatar.uv.local.len(),
+        avatar.channels,
+        report.texels,
+        report.observed_texels,
+        report.pruned,
+        out.display()
+    );
+    for (stage, d) in &report.timings {
+        println!("  {:32} {:8.1} ms", stage.name(), d.as_secs_f64() * 1e3);
+    }
     Ok(())
 }
 

@@ -183,3 +183,75 @@ fn fit_writes_tracking_and_takes_a_model_folder() {
     assert_eq!(fitted.frames.len(), 1);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn reconstruct_in_guava_mode_with_exported_networks() {
+    use guava::body::{EhmModel, Posable};
+    use guava::tracking::{BodyKind, Frame, TrackedCamera, Tracking};
+
+    let dir = std::env::temp_dir().join(format!("guava-cli-guava-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let ehm = "tests/data/ehm_synthetic.npz";
+    let body = EhmModel::load(std::path::Path::new(ehm)).expect("synthetic EHM");
+    let mut tracking = Tracking::new(
+        BodyKind::Smplx,
+        30.0,
+        body.joint_names().map(String::from).collect(),
+        Vec::new(),
+    );
+    tracking.frames.push(Frame {
+        translation: [0.0; 3],
+        rotations: vec![[0.0; 3]; body.joint_names().len()],
+        values: Vec::new(),
+        camera: Some(TrackedCamera {
+            w2c: [
+                [1.0, 0.0, 0.0, 0.0],
+                [0.0, -1.0, 0.0, 0.2],
+                [0.0, 0.0, -1.0, 22.0],
+            ],
+            invtanfov: 24.0,
+        }),
+    });
+    let (photo, track, out) = (dir.join("p.png"), dir.join("p.json"), dir.join("p.guava"));
+    tracking.save(&track).expect("tracking");
+    image::RgbaImage::from_pixel(200, 200, image::Rgba([180, 120, 90, 255]))
+        .save(&photo)
+        .expect("photo");
+    let path = |p: &std::path::Path| p.display().to_string();
+    let args = |models: &str| {
+        vec![
+            "reconstruct".to_string(),
+            "--image".into(),
+            path(&photo),
+            "--guava-models".into(),
+            models.into(),
+            "--ehm".into(),
+            ehm.into(),
+            "--out".into(),
+            path(&out),
+        ]
+    };
+    let run = |a: Vec<String>| guava(&a.iter().map(String::as_str).collect::<Vec<_>>());
+
+    let (ok, stdout, stderr) = run(args("tests/data/guava_onnx"));
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("GUAVA reconstruction"), "{stdout}");
+    let avatar = guava::avatar::Avatar::load(&out).expect("the avatar file loads");
+    assert_eq!(avatar.kind, guava::avatar::AvatarKind::Guava);
+    assert_eq!(avatar.template.len(), body.body.template.len());
+
+    // A folder without the models: one error naming the folder and each missing file.
+    let (ok, _, stderr) = run(args(&path(&dir)));
+    assert!(!ok);
+    assert!(
+        stderr.contains("guava_encoder.onnx: missing")
+            && stderr.contains("guava_uv_decoder.onnx: missing"),
+        "{stderr}"
+    );
+    // GUAVA mode needs its body.
+    let mut no_body = args("tests/data/guava_onnx");
+    no_body.drain(5..7);
+    let (ok, _, stderr) = run(no_body);
+    assert!(!ok && stderr.contains("--ehm"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}

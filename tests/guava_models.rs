@@ -43,7 +43,7 @@ fn exported_networks_match_pytorch_within_1e4_relative() {
             d.colors,
             d.vertices
         ),
-        (56, 32, 35, 16, 32, 32, 97),
+        (56, 32, 35, 8, 32, 8, 10_595),
         "the reduced export's sizes"
     );
     assert!(
@@ -53,8 +53,8 @@ fn exported_networks_match_pytorch_within_1e4_relative() {
     );
     let npz = Npz::open(&models_dir().join("fixture.npz")).expect("fixture");
     let array = |name: &str| {
-        npz.f32s(name, &[None; 4][..npz.shape(name).unwrap().len()])
-            .unwrap()
+        npz.f32s(name, &[None; 4][..npz.shape(name).expect("fixture").len()])
+            .expect("fixture")
             .0
             .to_vec()
     };
@@ -133,7 +133,7 @@ fn a_folder_missing_models_names_every_missing_file() {
     );
     let message = GuavaModels::load_dir(runtime(), &dir)
         .err()
-        .unwrap()
+        .expect("fixture")
         .to_string();
     assert!(message.contains(&dir.display().to_string()), "{message}");
     std::fs::remove_dir_all(&dir).ok();

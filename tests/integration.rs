@@ -9,6 +9,7 @@ mod body;
 mod cli;
 mod ehm;
 mod fit;
+mod guava_mode;
 mod guava_models;
 mod mesh_view;
 mod onnx_runtime;

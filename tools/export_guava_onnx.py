@@ -62,9 +62,11 @@ FULL = dict(image=518, render=512, uv=512, vit_dim=768, vit_depth=12, vit_heads=
             dino_out=32, prj_out=128, smplx_fea=128, global_dim=256, style=512, style_feat=512,
             style_mlp=8, channel_scale=1, uv_out=96, color=32, vertices=10595,
             head_dims=[256, 512, 1024, 1024])
+# Reduced: small widths and sizes, but the synthetic EHM's 10,595 vertices, so the reduced models
+# also run the whole GUAVA-mode reconstruction in the tests (tests/guava_mode.rs).
 REDUCED = dict(image=56, render=32, uv=32, vit_dim=48, vit_depth=5, vit_heads=4,
-               dino_out=32, prj_out=16, smplx_fea=16, global_dim=16, style=32, style_feat=32,
-               style_mlp=2, channel_scale=8, uv_out=24, color=32, vertices=97,
+               dino_out=32, prj_out=8, smplx_fea=8, global_dim=16, style=32, style_feat=32,
+               style_mlp=2, channel_scale=8, uv_out=24, color=8, vertices=10595,
                head_dims=[16, 32, 64, 64])
 
 

@@ -1,10 +1,12 @@
 //! Benchmarks behind `guava bench …`: each prints a table of medians and the hardware it ran on.
 
 mod body;
+mod guava;
 mod reconstruct;
 mod splat;
 
 pub use body::{BodyBenchArgs, body};
+pub use guava::{GuavaBenchArgs, guava};
 pub use reconstruct::{ReconstructBenchArgs, reconstruct};
 pub use splat::{SplatBenchArgs, splat};
 

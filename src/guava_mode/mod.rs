@@ -2,5 +2,8 @@
 //! (exported from the authors' code by `tools/export_guava_onnx.py`).
 
 pub mod models;
+pub mod reconstruct;
+pub mod sample;
 
 pub use models::{DecodedGaussians, Dims, Encoded, GuavaModels, GuavaModelsError};
+pub use reconstruct::{GuavaReport, reconstruct_guava, reconstruct_guava_file, uv_map};

@@ -226,7 +226,7 @@ pub fn check(infos: &BTreeMap<Role, ModelInfo>) -> Result<Dims, Vec<String>> {
         colors: get('C'),
     };
     if problems.is_empty() {
-        if dims.image % 14 != 0 {
+        if !dims.image.is_multiple_of(14) {
             problems.push(format!(
                 "{}: image side {} is not a multiple of DINOv2's 14-pixel patch",
                 Role::Encoder.file(),
@@ -500,9 +500,9 @@ mod tests {
     #[test]
     fn another_exporter_version_and_disagreeing_sizes_are_each_named() {
         let mut infos = declared(guava_sizes);
-        infos.get_mut(&Role::Encoder).unwrap().format = Some("0".into());
+        infos.get_mut(&Role::Encoder).expect("declared").format = Some("0".into());
         // The UV decoder expects one pixel-feature channel more than the encoder gives.
-        infos.get_mut(&Role::UvDecoder).unwrap().inputs[0].1[1] = 36;
+        infos.get_mut(&Role::UvDecoder).expect("declared").inputs[0].1[1] = 36;
         let problems = check(&infos).expect_err("must be refused");
         assert_eq!(problems.len(), 2, "{problems:?}");
         assert!(problems[0].starts_with("guava_encoder.onnx: exporter format \"0\""));
@@ -517,7 +517,11 @@ mod tests {
     #[test]
     fn dynamic_sizes_and_bad_patch_grids_are_refused() {
         let mut infos = declared(guava_sizes);
-        infos.get_mut(&Role::VertexDecoder).unwrap().inputs[0].1[1] = -1;
+        infos
+            .get_mut(&Role::VertexDecoder)
+            .expect("declared")
+            .inputs[0]
+            .1[1] = -1;
         let problems = check(&infos).expect_err("dynamic");
         assert!(problems[0].contains("not fixed"), "{problems:?}");
         let problems = check(&declared(|c| if c == 'S' { 520 } else { guava_sizes(c) }))

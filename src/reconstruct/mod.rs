@@ -53,6 +53,10 @@ pub enum ReconstructError {
     Pose(#[from] PoseError),
     #[error("pose model: {0}")]
     Keypoints(String),
+    #[error("{0}")]
+    Models(String),
+    #[error("GUAVA models: {0}")]
+    Network(#[from] crate::onnx::OnnxError),
     #[error("cancelled")]
     Cancelled,
 }
@@ -62,10 +66,16 @@ pub enum ReconstructError {
 pub enum Stage {
     /// Keypoints and mask from the pose model, and the fit (photos without tracking or alpha).
     Fit,
+    /// GUAVA mode: DINOv2 and its feature head on the photo.
+    Encode,
     Pose,
     Rasterize,
     TextureMap,
     Fill,
+    /// GUAVA mode: the template-Gaussian decoder.
+    DecodeVertices,
+    /// GUAVA mode: the UV StyleUNet and its Gaussian heads.
+    DecodeUv,
     Gaussians,
 }
 
@@ -82,6 +92,9 @@ impl Stage {
     pub fn name(self) -> &'static str {
         match self {
             Stage::Fit => "keypoints, mask and fit",
+            Stage::Encode => "encoder (DINOv2, feature maps)",
+            Stage::DecodeVertices => "template-Gaussian decoder",
+            Stage::DecodeUv => "UV decoder (StyleUNet)",
             Stage::Pose => "pose source body",
             Stage::Rasterize => "rasterize (visibility, mask)",
             Stage::TextureMap => "inverse texture mapping",
@@ -160,7 +173,7 @@ impl SourceView {
     /// the source size. `file` names the tracking file in errors.
     pub fn from_tracking(
         tracking: &Tracking,
-        body: &BodyModel,
+        body: &impl Posable,
         file: &str,
     ) -> Result<Self, ReconstructError> {
         if tracking.frames.is_empty() {
@@ -378,13 +391,13 @@ pub fn reconstruct_photo_file(
 
 /// Times consecutive stages and asks the progress callback whether to go on.
 #[derive(Default)]
-struct StageClock {
+pub(crate) struct StageClock {
     current: Option<(Stage, Instant)>,
     done: Vec<(Stage, Duration)>,
 }
 
 impl StageClock {
-    fn start(
+    pub(crate) fn start(
         &mut self,
         stage: Stage,
         progress: &mut dyn FnMut(Stage) -> bool,
@@ -403,7 +416,7 @@ impl StageClock {
         }
     }
 
-    fn finish(mut self) -> Vec<(Stage, Duration)> {
+    pub(crate) fn finish(mut self) -> Vec<(Stage, Duration)> {
         self.stop();
         self.done
     }

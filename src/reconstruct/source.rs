@@ -26,13 +26,18 @@ pub struct SourceImage {
 impl SourceImage {
     /// Reads a PNG or JPEG; an alpha channel, when present, is the person mask.
     pub fn load(path: &Path) -> Result<Self, ReconstructError> {
+        Self::load_at(path, SOURCE_SIZE)
+    }
+
+    /// [`Self::load`] at `size`².
+    pub fn load_at(path: &Path, size: u32) -> Result<Self, ReconstructError> {
         let file = path.display().to_string();
         let decoded = image::open(path).map_err(|e| ReconstructError::Image {
             file: file.clone(),
             problem: e.to_string(),
         })?;
         let has_alpha = decoded.color().has_alpha();
-        Self::from_rgba(&decoded.to_rgba8(), has_alpha, &file)
+        Self::from_rgba_at(&decoded.to_rgba8(), has_alpha, &file, size)
     }
 
     /// Crops the centred square, resizes it to [`SOURCE_SIZE`] and applies the alpha as mask when
@@ -41,6 +46,16 @@ impl SourceImage {
         image: &RgbaImage,
         use_alpha: bool,
         file: &str,
+    ) -> Result<Self, ReconstructError> {
+        Self::from_rgba_at(image, use_alpha, file, SOURCE_SIZE)
+    }
+
+    /// [`Self::from_rgba`] at `size`² (GUAVA's encoder takes 518²).
+    pub fn from_rgba_at(
+        image: &RgbaImage,
+        use_alpha: bool,
+        file: &str,
+        size: u32,
     ) -> Result<Self, ReconstructError> {
         let (w, h) = image.dimensions();
         let side = w.min(h);
@@ -54,13 +69,8 @@ impl SourceImage {
         }
         let crop = imageops::crop_imm(image, (w - side) / 2, (h - side) / 2, side, side).to_image();
         // Triangle = bilinear with its support widened by the scale: torchvision's antialias.
-        let resized = imageops::resize(
-            &crop,
-            SOURCE_SIZE,
-            SOURCE_SIZE,
-            imageops::FilterType::Triangle,
-        );
-        let n = (SOURCE_SIZE * SOURCE_SIZE) as usize;
+        let resized = imageops::resize(&crop, size, size, imageops::FilterType::Triangle);
+        let n = (size * size) as usize;
         let mut rgb = Vec::with_capacity(3 * n);
         let mut mask = Vec::with_capacity(n);
         for p in resized.pixels() {
@@ -77,7 +87,7 @@ impl SourceImage {
             });
         }
         Ok(Self {
-            size: SOURCE_SIZE,
+            size,
             rgb,
             mask: use_alpha.then_some(mask),
         })

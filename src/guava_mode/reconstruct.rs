@@ -1,0 +1,313 @@
+//! GUAVA mode's reconstruction (`ubody_gaussian.py:Ubody_Gaussian_inferer.forward`, notes §4):
+//! encoder on the photo → EHM in the source pose → f_map2 sampled at each projected vertex →
+//! template decoder; [RGB ‖ f_map1] inverse-texture-mapped into UV space with face visibility →
+//! UV decoder → UV Gaussians bound to their texels' triangles, pruned at opacity ≤ 0.001.
+//!
+//! Where this departs from the reference (so parity with it is not bit-exact): the texel → face
+//! map is our own rasterization of the UV layout (texel centres at +½; the reference rounds
+//! corners and fills with OpenCV), and face visibility comes from our z-buffer, which leaves out
+//! triangles with a corner within 1 mm of the camera plane.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Duration;
+
+use glam::{Mat4, Vec3};
+
+use super::models::GuavaModels;
+use super::sample::{Padding, grid_sample, project_ndc};
+use crate::avatar::{Avatar, AvatarKind, LocalGaussians, UvGaussians};
+use crate::body::{EhmModel, Posable, PosedBody};
+use crate::camera::Camera;
+use crate::keypoints::Landmarkers;
+use crate::reconstruct::raster::rasterize;
+use crate::reconstruct::{ReconstructError, SourceImage, SourceView, Stage, StageClock, UvMap};
+use crate::tracking::Tracking;
+
+/// UV Gaussians at or below this opacity are dropped (`cfg.opacity_threshold`).
+pub const PRUNE_OPACITY: f32 = 0.001;
+
+#[derive(Clone, Debug, Default)]
+pub struct GuavaReport {
+    pub timings: Vec<(Stage, Duration)>,
+    /// Triangles that win at least one pixel of the source view.
+    pub visible_faces: usize,
+    pub texels: usize,
+    /// Texels on visible faces that project into the image (nonzero features).
+    pub observed_texels: usize,
+    pub pruned: usize,
+}
+
+/// The EHM body's UV layout as a texel map (its per-corner texture coordinates, v flipped as the
+/// reference flips them, so row 0 is the top of GUAVA's UV map).
+pub fn uv_map(body: &EhmModel, size: u32) -> UvMap {
+    UvMap::new(&body.texcoords, &body.triangle_uvs, size)
+}
+
+/// Reconstructs `image` (already at the encoder's size, masked) seen from `view` on `body`.
+/// `uv` is [`uv_map`] at the models' UV size. Progress and cancellation as in
+/// [`crate::reconstruct::reconstruct_default`].
+pub fn reconstruct_guava(
+    models: &mut GuavaModels,
+    body: &EhmModel,
+    uv: &UvMap,
+    view: &SourceView,
+    image: &SourceImage,
+    source_name: &str,
+    progress: &mut dyn FnMut(Stage) -> bool,
+) -> Result<(Avatar, GuavaReport), ReconstructError> {
+    let d = models.dims;
+    let n = body.body.template.len();
+    let mut mismatch = Vec::new();
+    if image.size as usize != d.image {
+        mismatch.push(format!(
+            "the image is {0}², the encoder takes {1}²",
+            image.size, d.image
+        ));
+    }
+    if uv.size as usize != d.uv {
+        mismatch.push(format!(
+            "the UV map is {0}², the UV decoder makes {1}²",
+            uv.size, d.uv
+        ));
+    }
+    if n != d.vertices {
+        mismatch.push(format!(
+            "body {:?} has {n} vertices, the template decoder was exported for {}",
+            body.name, d.vertices
+        ));
+    }
+    if !mismatch.is_empty() {
+        return Err(ReconstructError::Models(format!(
+            "GUAVA models in {}: {}",
+            models.dir.display(),
+            mismatch.join("; ")
+        )));
+    }
+    let mut report = GuavaReport {
+        texels: uv.len(),
+        ..Default::default()
+    };
+    let mut clock = StageClock::default();
+    let w2c = view.camera.view_from_world;
+    let invtanfov = view.camera.invtanfov();
+    // get_cam_dirs: the world-to-camera rotation's third column, as the reference computes it.
+    let cam_dir = w2c.z_axis.truncate();
+
+    clock.start(Stage::Encode, progress)?;
+    let planar: Vec<f32> = (0..3)
+        .flat_map(|c| image.rgb.iter().skip(c).step_by(3).copied())
+        .collect();
+    let encoded = models.encode(&planar)?;
+
+    clock.start(Stage::Pose, progress)?;
+    let mut posed = PosedBody::default();
+    body.pose(&view.pose, &mut posed)?;
+
+    clock.start(Stage::Rasterize, progress)?;
+    let camera = Camera::guava(w2c, d.features as u32, invtanfov);
+    let fragments = rasterize(&posed.vertices, &body.triangles, &camera);
+    let mut visible = vec![false; body.triangles.len()];
+    for &t in fragments.triangle.iter().filter(|&&t| t >= 0) {
+        visible[t as usize] = true;
+    }
+    report.visible_faces = visible.iter().filter(|&&v| v).count();
+    if report.visible_faces == 0 {
+        return Err(ReconstructError::NothingVisible);
+    }
+
+    clock.start(Stage::TextureMap, progress)?;
+    let projection = Projection { w2c, invtanfov };
+    let sampled = projection.sample_vertices(
+        &posed.vertices,
+        &encoded.vertex_features,
+        d.vertex_channels,
+        d.features,
+    );
+    let (uv_features, observed) = projection.texture_map(
+        uv,
+        &posed.vertices,
+        &body.triangles,
+        &visible,
+        &encoded.pixel_features,
+        d.pixel_channels,
+        d.features,
+    );
+    report.observed_texels = observed;
+
+    clock.start(Stage::DecodeVertices, progress)?;
+    let vertex = models.decode_vertices(sampled, &encoded, cam_dir)?;
+
+    clock.start(Stage::DecodeUv, progress)?;
+    let uv_out = models.decode_uv(uv_features, &encoded, cam_dir)?;
+
+    clock.start(Stage::Gaussians, progress)?;
+    let c = d.colors;
+    let template = LocalGaussians {
+        rotations: vertex.rotations.chunks_exact(4).map(to4).collect(),
+        scales: vertex.scales.chunks_exact(3).map(to3).collect(),
+        opacities: vertex.opacities,
+        features: activated(vertex.colors, c),
+    };
+    let mut gaussians = UvGaussians::default();
+    for &i in &uv.texels {
+        let i = i as usize;
+        if uv_out.opacities[i] <= PRUNE_OPACITY {
+            report.pruned += 1;
+            continue;
+        }
+        gaussians.triangles.push(uv.triangle[i] as u32);
+        gaussians.barycentrics.push(uv.bary[i]);
+        gaussians
+            .offsets
+            .push(to3(&uv_out.local_pos[3 * i..3 * i + 3]));
+        let local = &mut gaussians.local;
+        local
+            .rotations
+            .push(to4(&uv_out.rotations[4 * i..4 * i + 4]));
+        local.scales.push(to3(&uv_out.scales[3 * i..3 * i + 3]));
+        local.opacities.push(uv_out.opacities[i]);
+        local
+            .features
+            .extend(activated(uv_out.colors[c * i..c * (i + 1)].to_vec(), c));
+    }
+    let avatar = Avatar {
+        kind: AvatarKind::Guava,
+        body: body.name.clone(),
+        body_vertices: n,
+        body_triangles: body.triangles.len(),
+        channels: c,
+        identity: identity(body, &view.pose.coefficients),
+        source: source_name.into(),
+        template,
+        uv: gaussians,
+    };
+    report.timings = clock.finish();
+    Ok((avatar, report))
+}
+
+/// Reads `photo` at the encoder's size, masks it (its alpha, else the pose model's person
+/// segmentation when `landmarkers` are given, else refused: GUAVA's encoder was trained on
+/// masked photos), takes frame 0 of `tracking` on `body` as the source view and runs
+/// [`reconstruct_guava`]. Every error names its file.
+pub fn reconstruct_guava_file(
+    models: &mut GuavaModels,
+    body: &EhmModel,
+    uv: &UvMap,
+    photo: &Path,
+    tracking: &Path,
+    landmarkers: Option<&mut Landmarkers>,
+    progress: &mut dyn FnMut(Stage) -> bool,
+) -> Result<(Avatar, GuavaReport), ReconstructError> {
+    let mut image = SourceImage::load_at(photo, models.dims.image as u32)?;
+    if image.mask.is_none() {
+        let pose = landmarkers
+            .ok_or_else(|| ReconstructError::Image {
+                file: photo.display().to_string(),
+                problem:
+                    "has no alpha channel and the pose model (for its person mask) did not load"
+                        .into(),
+            })?
+            .pose
+            .detect(&image)
+            .map_err(|e| ReconstructError::Keypoints(e.to_string()))?;
+        image.apply_mask(pose.mask_at(image.size as usize));
+    }
+    let name = tracking.display().to_string();
+    let view = SourceView::from_tracking(&Tracking::load(tracking)?, body, &name)?;
+    let source = photo.file_name().map_or_else(
+        || photo.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    reconstruct_guava(models, body, uv, &view, &image, &source, progress)
+}
+
+/// The source camera as GUAVA's sampling sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct Projection {
+    pub w2c: Mat4,
+    pub invtanfov: f32,
+}
+
+impl Projection {
+    /// `sample_prj_feature`: the `channels` planes of `side`² `maps` at each vertex's projection
+    /// (border padding); vertex-major, `channels` per vertex.
+    pub fn sample_vertices(
+        &self,
+        vertices: &[Vec3],
+        maps: &[f32],
+        channels: usize,
+        side: usize,
+    ) -> Vec<f32> {
+        let mut sampled = vec![0.0; vertices.len() * channels];
+        for (v, out) in vertices.iter().zip(sampled.chunks_exact_mut(channels)) {
+            let ndc = project_ndc(&self.w2c, self.invtanfov, *v);
+            grid_sample(maps, channels, side, ndc, Padding::Border, out);
+        }
+        sampled
+    }
+
+    /// `convert_pixel_feature_to_uv`: each valid texel's surface point on the posed mesh,
+    /// projected, samples `maps` (zero padding); texels of faces not `visible` stay zero.
+    /// Returns `channels` planes of the UV map and how many texels received anything.
+    #[allow(clippy::too_many_arguments)]
+    pub fn texture_map(
+        &self,
+        uv: &UvMap,
+        vertices: &[Vec3],
+        triangles: &[[u32; 3]],
+        visible: &[bool],
+        maps: &[f32],
+        channels: usize,
+        side: usize,
+    ) -> (Vec<f32>, usize) {
+        let texels = (uv.size * uv.size) as usize;
+        let mut out = vec![0.0; channels * texels];
+        let mut texel = vec![0.0; channels];
+        let mut observed = 0;
+        for &i in &uv.texels {
+            let i = i as usize;
+            if !visible[uv.triangle[i] as usize] {
+                continue;
+            }
+            let point = uv.point(i, vertices, triangles);
+            let ndc = project_ndc(&self.w2c, self.invtanfov, point);
+            grid_sample(maps, channels, side, ndc, Padding::Zeros, &mut texel);
+            observed += usize::from(texel.iter().any(|&f| f != 0.0));
+            for (c, &f) in texel.iter().enumerate() {
+                out[c * texels + i] = f;
+            }
+        }
+        (out, observed)
+    }
+}
+
+/// Colours with the first three channels through a sigmoid (`Ubody_Gaussian.__init__`: RGB in
+/// [0, 1]; the other channels stay raw for the refiner).
+fn activated(mut colors: Vec<f32>, channels: usize) -> Vec<f32> {
+    for gaussian in colors.chunks_exact_mut(channels) {
+        for v in &mut gaussian[..3] {
+            *v = 1.0 / (1.0 + (-*v).exp());
+        }
+    }
+    colors
+}
+
+/// EHM's identity coefficients (SMPL-X and FLAME shape) that the source pose sets.
+fn identity(body: &EhmModel, coefficients: &[f32]) -> BTreeMap<String, f32> {
+    body.parameter_names()
+        .zip(coefficients)
+        .filter(|(name, v)| {
+            **v != 0.0 && (name.starts_with("shape_") || name.starts_with("flame_shape_"))
+        })
+        .map(|(name, &v)| (name.to_string(), v))
+        .collect()
+}
+
+fn to3(s: &[f32]) -> [f32; 3] {
+    [s[0], s[1], s[2]]
+}
+
+fn to4(s: &[f32]) -> [f32; 4] {
+    [s[0], s[1], s[2], s[3]]
+}

@@ -1,0 +1,223 @@
+//! GUAVA mode end to end: the geometry between the networks against the reference
+//! (tools/make_guava_sampling_fixture.py), and the whole reconstruction with the reduced,
+//! randomly initialised networks (tests/data/guava_onnx) on the synthetic EHM.
+
+use std::path::Path;
+
+use glam::{Mat4, Vec3};
+use guava::avatar::{AvatarKind, Rig};
+use guava::body::{BodyPose, EhmModel, Posable, PosedBody};
+use guava::camera::Camera;
+use guava::gaussians::GaussianCloud;
+use guava::guava_mode::reconstruct::{PRUNE_OPACITY, Projection};
+use guava::guava_mode::{GuavaModels, reconstruct_guava, uv_map};
+use guava::npz::Npz;
+use guava::onnx::OnnxRuntime;
+use guava::reconstruct::{ReconstructError, SourceImage, SourceView, UvMap};
+
+fn model() -> EhmModel {
+    EhmModel::load(Path::new("tests/data/ehm_synthetic.npz")).expect("synthetic EHM loads")
+}
+
+fn floats(npz: &Npz, name: &str) -> Vec<f32> {
+    let rank = npz.shape(name).expect(name).len();
+    npz.f32s(name, &vec![None; rank]).expect(name).0.to_vec()
+}
+
+fn max_abs_diff(a: &[f32], b: &[f32]) -> f32 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f32::max)
+}
+
+#[test]
+fn sampling_and_inverse_texture_mapping_match_the_reference() {
+    let model = model();
+    let npz = Npz::open(Path::new("tests/data/guava_sampling_parity.npz")).expect("fixture");
+    let vertices: Vec<Vec3> = floats(&npz, "vertices")
+        .chunks_exact(3)
+        .map(Vec3::from_slice)
+        .collect();
+    let w2c = Mat4::from_cols_slice(&floats(&npz, "w2c")).transpose();
+    let projection = Projection {
+        w2c,
+        invtanfov: floats(&npz, "invtanfov")[0],
+    };
+    let side = npz.shape("vertex_maps").expect("fixture")[1];
+    let sampled = projection.sample_vertices(
+        &vertices,
+        &floats(&npz, "vertex_maps"),
+        npz.shape("vertex_maps").expect("fixture")[0],
+        side,
+    );
+    let vertex_err = max_abs_diff(&sampled, &floats(&npz, "out_sampled"));
+
+    // The reference's own texel map and visible faces, so both sides sample the same points.
+    let size = npz.shape("uvmap_f_idx").expect("fixture")[0];
+    let faces = model.triangles.len() as i64;
+    let (f_idx, _) = npz
+        .indices("uvmap_f_idx", &[Some(size), Some(size)], -1..faces)
+        .expect("fixture");
+    let bary: Vec<[f32; 3]> = floats(&npz, "uvmap_f_bary")
+        .chunks_exact(3)
+        .map(|b| [b[0], b[1], b[2]])
+        .collect();
+    let uv = UvMap {
+        size: size as u32,
+        triangle: f_idx.iter().map(|&f| f as i32).collect(),
+        bary,
+        texels: (0..f_idx.len() as u32)
+            .filter(|&i| f_idx[i as usize] >= 0)
+            .collect(),
+        mirror: vec![-1; f_idx.len()],
+    };
+    let mut visible = vec![false; model.triangles.len()];
+    for &f in npz
+        .indices("visible_faces", &[None], 0..faces)
+        .expect("fixture")
+        .0
+    {
+        visible[f as usize] = true;
+    }
+    let channels = npz.shape("pixel_maps").expect("fixture")[0];
+    let (mapped, observed) = projection.texture_map(
+        &uv,
+        &vertices,
+        &model.triangles,
+        &visible,
+        &floats(&npz, "pixel_maps"),
+        channels,
+        side,
+    );
+    let reference = floats(&npz, "out_uv_features");
+    let texel_err = max_abs_diff(&mapped, &reference);
+    let plane = size * size;
+    let reference_observed = (0..plane)
+        .filter(|&i| (0..channels).any(|c| reference[c * plane + i] != 0.0))
+        .count();
+    println!(
+        "vertices: max |Δ| {vertex_err:.2e}; texels: max |Δ| {texel_err:.2e}, {observed} \
+         sampled (reference {reference_observed}) of {}",
+        uv.len()
+    );
+    // f32 on both sides: the pixel coordinate (±32 at 24·x/z) carries ~4e-6 of rounding, times
+    // the maps' gradients (unit normal values, up to ~4 per pixel).
+    assert!(vertex_err <= 1e-4, "vertex sampling {vertex_err:.2e}");
+    assert!(texel_err <= 1e-4, "inverse texture mapping {texel_err:.2e}");
+    assert_eq!(observed, reference_observed);
+}
+
+/// The reduced models, built for the synthetic EHM's 10,595 vertices and a 32² UV map.
+fn models() -> GuavaModels {
+    let runtime = OnnxRuntime::load().expect("ONNX Runtime: run `bash tools/setup.sh` first");
+    GuavaModels::load_dir(runtime, Path::new("tests/data/guava_onnx")).expect("models load")
+}
+
+/// A source view GUAVA's tracker would give: the posed body 22 m in front of the camera.
+fn view(model: &EhmModel) -> SourceView {
+    let w2c = Mat4::from_cols_array_2d(&[
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, -1.0, 0.0, 0.0],
+        [0.0, 0.0, -1.0, 0.0],
+        [0.0, 0.2, 22.0, 1.0],
+    ]);
+    let mut pose = BodyPose::rest(model);
+    pose.set_rotation(model, "left_elbow", Vec3::new(0.0, 0.0, 0.8))
+        .expect("joint");
+    SourceView {
+        pose,
+        camera: Camera::guava(w2c, 512, 24.0),
+    }
+}
+
+/// A test card: a smooth colour ramp over a dark border, opaque where a person would stand.
+fn photo(side: u32) -> SourceImage {
+    let image = image::RgbaImage::from_fn(side * 4, side * 4, |x, y| {
+        let inside = (x as i32 - 2 * side as i32).abs() < side as i32;
+        image::Rgba([
+            (x % 256) as u8,
+            (y % 256) as u8,
+            128,
+            if inside { 255 } else { 0 },
+        ])
+    });
+    SourceImage::from_rgba_at(&image, true, "card.png", side).expect("image")
+}
+
+#[test]
+fn reconstruction_with_reduced_networks_animates_and_refuses_mismatches() {
+    let model = model();
+    let mut models = models();
+    let d = models.dims;
+    let uv = uv_map(&model, d.uv as u32);
+    let view = view(&model);
+    let mut stages = Vec::new();
+    let (avatar, report) = reconstruct_guava(
+        &mut models,
+        &model,
+        &uv,
+        &view,
+        &photo(d.image as u32),
+        "card.png",
+        &mut |s| {
+            stages.push(s);
+            true
+        },
+    )
+    .expect("reconstructs");
+    println!("{report:?}");
+    assert_eq!(avatar.kind, AvatarKind::Guava);
+    assert_eq!(avatar.template.len(), model.body.template.len());
+    assert_eq!(avatar.uv.local.len() + report.pruned, uv.len());
+    assert!(avatar.uv.local.opacities.iter().all(|&o| o > PRUNE_OPACITY));
+    assert!(report.visible_faces > 0 && report.visible_faces < model.triangles.len());
+    assert!(report.observed_texels > 0 && report.observed_texels < uv.len());
+    assert_eq!(
+        stages.len(),
+        report.timings.len(),
+        "every stage reported and timed"
+    );
+    let rgb_in_unit = |f: &[f32]| {
+        f.chunks_exact(avatar.channels)
+            .all(|g| g[..3].iter().all(|v| (0.0..=1.0).contains(v)))
+    };
+    assert!(rgb_in_unit(&avatar.template.features) && rgb_in_unit(&avatar.uv.local.features));
+
+    // It animates on its body, and the same pose twice gives the same cloud.
+    let mut posed = PosedBody::default();
+    model.pose(&view.pose, &mut posed).expect("pose");
+    let (mut rig, mut cloud) = (Rig::default(), GaussianCloud::default());
+    rig.animate(&avatar, &posed, &model.triangles, &mut cloud)
+        .expect("animates");
+    assert_eq!(cloud.len(), avatar.len());
+    assert!(cloud.positions.iter().flatten().all(|v| v.is_finite()));
+
+    // A photo at the wrong size is refused, naming both sizes; cancelling stops it.
+    let err = reconstruct_guava(
+        &mut models,
+        &model,
+        &uv,
+        &view,
+        &photo(64),
+        "x",
+        &mut |_| true,
+    )
+    .expect_err("wrong size");
+    assert!(
+        matches!(&err, ReconstructError::Models(m) if m.contains("64²") && m.contains(&format!("{}²", d.image))),
+        "{err}"
+    );
+    let err = reconstruct_guava(
+        &mut models,
+        &model,
+        &uv,
+        &view,
+        &photo(d.image as u32),
+        "x",
+        &mut |_| false,
+    )
+    .expect_err("cancelled");
+    assert!(matches!(err, ReconstructError::Cancelled));
+}
