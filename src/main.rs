@@ -32,6 +32,10 @@ enum Command {
         /// An avatar file (.guava), posed on the default body.
         #[arg(long)]
         avatar: Option<PathBuf>,
+        /// With --avatar: the EHM body (tools/convert_ehm.py) a GUAVA-mode avatar is bound to;
+        /// without it, avatars are posed on the default body.
+        #[arg(long, requires = "avatar")]
+        ehm: Option<PathBuf>,
         /// With --avatar: pose it from this motion (tracking .json, ARKit .csv, SMPL-X .npz) at --time.
         #[arg(long, requires = "avatar")]
         motion: Option<PathBuf>,
@@ -153,6 +157,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Render {
             ply,
             avatar,
+            ehm,
             motion,
             time,
             tracked_camera,
@@ -171,7 +176,34 @@ fn run(cli: Cli) -> Result<()> {
                     (cloud, ply.display().to_string(), None)
                 }
                 (None, Some(avatar)) => {
-                    let (cloud, camera) = posed_avatar(&avatar, motion.as_deref(), time)?;
+                    let avatar_file = guava::avatar::Avatar::load(&avatar)?;
+                    let (cloud, camera) = match ehm {
+                        Some(ehm) => {
+                            let body = guava::body::EhmModel::load(&ehm)?;
+                            let (name, vertices) = (body.name.clone(), body.body.template.len());
+                            posed_avatar(
+                                &avatar_file,
+                                &body,
+                                &name,
+                                vertices,
+                                motion.as_deref(),
+                                time,
+                            )
+                        }
+                        None => {
+                            let body = guava::body::BodyModel::default_body()?;
+                            let (name, vertices) = (body.name.clone(), body.vertices.len());
+                            posed_avatar(
+                                &avatar_file,
+                                &body,
+                                &name,
+                                vertices,
+                                motion.as_deref(),
+                                time,
+                            )
+                        }
+                    }
+                    .with_context(|| avatar.display().to_string())?;
                     (
                         cloud,
                         avatar.display().to_string(),
@@ -254,32 +286,33 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
-/// An avatar posed on the default body: at rest, or by `motion` at `time` (then also the
-/// motion's tracked camera at that time, if it has one).
+/// An avatar posed on its body (named `name`, `vertices` vertices): at rest, or by `motion` at
+/// `time` (then also the motion's tracked camera at that time, if it has one).
 fn posed_avatar(
-    path: &Path,
+    avatar: &guava::avatar::Avatar,
+    body: &impl guava::body::Posable,
+    name: &str,
+    vertices: usize,
     motion: Option<&Path>,
     time: f64,
 ) -> Result<(guava::gaussians::GaussianCloud, Option<Camera>)> {
-    use guava::body::{BodyModel, BodyPose, PosedBody};
-    let avatar = guava::avatar::Avatar::load(path)?;
-    let body = BodyModel::default_body()?;
+    use guava::body::{BodyPose, PosedBody};
     avatar
-        .check_body(&body)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    let mut pose = BodyPose::rest(&body);
+        .check_bound(name, vertices, body)
+        .map_err(anyhow::Error::msg)?;
+    let mut pose = BodyPose::rest(body);
     let mut camera = None;
     if let Some(motion) = motion {
         let t = guava::tracking::import::open_motion(motion)?.tracking;
-        guava::tracking::Retarget::new(&t, &body).sample(&t, time, &mut pose);
+        guava::tracking::Retarget::new(&t, body).sample(&t, time, &mut pose);
         camera = guava::tracking::camera_at(&t, time)
             .map(|(w2c, invtanfov)| Camera::guava(w2c, guava::reconstruct::SOURCE_SIZE, invtanfov));
     }
-    avatar.apply_identity(&body, &mut pose);
+    avatar.apply_identity(body, &mut pose);
     let mut posed = PosedBody::default();
     body.pose(&pose, &mut posed)?;
     let mut cloud = guava::gaussians::GaussianCloud::new(avatar.channels);
-    guava::avatar::Rig::default().animate(&avatar, &posed, &body.triangles, &mut cloud)?;
+    guava::avatar::Rig::default().animate(avatar, &posed, body.triangles(), &mut cloud)?;
     Ok((cloud, camera))
 }
 

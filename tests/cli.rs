@@ -240,6 +240,22 @@ fn reconstruct_in_guava_mode_with_exported_networks() {
     assert_eq!(avatar.kind, guava::avatar::AvatarKind::Guava);
     assert_eq!(avatar.template.len(), body.body.template.len());
 
+    // It renders posed on its EHM body, and not on the default body.
+    let png = dir.join("p_render.png");
+    let render = |body: Option<&str>| {
+        let (avatar, image) = (path(&out), path(&png));
+        let mut a = vec!["render", "--avatar", &avatar, "--out", &image];
+        if let Some(b) = body {
+            a.extend(["--ehm", b]);
+        }
+        guava(&a)
+    };
+    let (ok, _, stderr) = render(Some(ehm));
+    assert!(ok, "{stderr}");
+    assert!(image::open(&png).is_ok(), "a PNG was written");
+    let (ok, _, stderr) = render(None);
+    assert!(!ok && stderr.contains("ehm_synthetic"), "{stderr}");
+
     // A folder without the models: one error naming the folder and each missing file.
     let (ok, _, stderr) = run(args(&path(&dir)));
     assert!(!ok);

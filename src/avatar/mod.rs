@@ -19,7 +19,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::body::{BodyModel, BodyPose};
+use crate::body::{BodyModel, BodyPose, Posable};
 
 /// Which pipeline made an avatar; shown to the user, never conflated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -92,24 +92,27 @@ pub struct Avatar {
 impl Avatar {
     /// Whether `body` is the model this avatar is bound to (name, size, identity parameters).
     pub fn check_body(&self, body: &BodyModel) -> Result<(), String> {
-        if body.name != self.body
-            || body.vertices.len() != self.body_vertices
-            || body.triangles.len() != self.body_triangles
-        {
+        self.check_bound(&body.name, body.vertices.len(), body)
+    }
+
+    /// [`Self::check_body`] for any posable model, named `name` with `vertices` vertices.
+    pub fn check_bound(
+        &self,
+        name: &str,
+        vertices: usize,
+        body: &impl Posable,
+    ) -> Result<(), String> {
+        let triangles = body.triangles().len();
+        if name != self.body || vertices != self.body_vertices || triangles != self.body_triangles {
             return Err(format!(
                 "the avatar is bound to body {:?} ({} vertices, {} triangles), not {:?} ({} vertices, {} triangles)",
-                self.body,
-                self.body_vertices,
-                self.body_triangles,
-                body.name,
-                body.vertices.len(),
-                body.triangles.len()
+                self.body, self.body_vertices, self.body_triangles, name, vertices, triangles
             ));
         }
         match self
             .identity
             .keys()
-            .find(|n| body.target_index(n).is_none())
+            .find(|n| !body.parameter_names().any(|p| p == n.as_str()))
         {
             Some(name) => Err(format!(
                 "identity parameter {name:?} is not one of the body's"
@@ -119,9 +122,9 @@ impl Avatar {
     }
 
     /// Sets the avatar's identity coefficients on `pose` (a pose of the body it is bound to).
-    pub fn apply_identity(&self, body: &BodyModel, pose: &mut BodyPose) {
-        for (name, &value) in &self.identity {
-            if let Some(i) = body.target_index(name) {
+    pub fn apply_identity(&self, body: &impl Posable, pose: &mut BodyPose) {
+        for (i, name) in body.parameter_names().enumerate() {
+            if let Some(&value) = self.identity.get(name) {
                 pose.coefficients[i] = value;
             }
         }

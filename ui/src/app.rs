@@ -506,7 +506,7 @@ impl GuavaApp {
         if let Err(e) = avatar.check_body(&body.model) {
             return self.error(format!("{}: {e}; the current view is kept", path.display()));
         }
-        avatar.apply_identity(&body.model, &mut body.pose);
+        avatar.apply_identity(&*body.model, &mut body.pose);
         let mut label = format!("{} — {}", avatar.kind.label(), avatar.source);
         if let Some(r) = &report {
             let ms: f64 = r.timings.iter().map(|(_, d)| d.as_secs_f64() * 1e3).sum();
