@@ -312,6 +312,14 @@ fn malformed_models_give_one_clear_error() {
             with_array("left_hand", Some(npy("<i4", &[778], &[0; 12]))),
             "left_hand: data is 12 bytes",
         ),
+        (
+            with_array(
+                "uv_texel_face",
+                Some(npy("<i4", &[32, 32], &i32_bytes(&vec![21_076; 32 * 32]))),
+            ),
+            "uv_texel_face: element 0 is 21076, outside -1..21076",
+        ),
+        (with_array("uv_texel_bary", None), "uv_texel_bary: missing"),
         (b"PK\x03\x04 not really".to_vec(), "not a .npz archive"),
     ];
     for (bytes, expected) in cases {

@@ -152,6 +152,14 @@ fn reconstruction_with_reduced_networks_animates_and_refuses_mismatches() {
     let mut models = models();
     let d = models.dims;
     let uv = uv_map(&model, d.uv as u32);
+    // The synthetic EHM carries the reference's OpenCV-filled texel map at this size.
+    let reference = model.reference_texels.as_ref().expect("reference texels");
+    assert_eq!(reference.size as usize, d.uv);
+    assert_eq!(uv.triangle, reference.triangle);
+    assert_eq!(
+        uv.len(),
+        reference.triangle.iter().filter(|&&t| t >= 0).count()
+    );
     let view = view(&model);
     let mut stages = Vec::new();
     let (avatar, report) = reconstruct_guava(

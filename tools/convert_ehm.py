@@ -24,6 +24,9 @@ Output: an uncompressed-or-deflated .npz of little-endian arrays (format "guava-
   flame_v_template [Vf,3]     flame_shapedirs [Vf,3,S+E]  flame_posedirs [4*9, Vf*3]
   flame_j_regressor [5,Vf]    flame_parents [5] i32       flame_weights [Vf,5]
   flame_l_eyelid [Vf,3]       flame_r_eyelid [Vf,3]
+  uv_texel_face [U,U] i32     uv_texel_bary [U,U,3]   (the reference's own texel -> face map and
+                              barycentrics, rasterized by OpenCV at start-up, U = 512 as GUAVA
+                              uses; GUAVA mode samples with it so its texels are the reference's)
   n_shape, n_exp [1] i32      format: 0-d unicode string
 """
 
@@ -42,12 +45,13 @@ FORMAT = "guava-rs ehm 1"
 N_SHAPE, N_EXP = 300, 50  # EHM.__init__ defaults, used by GUAVA's inference
 
 
-def build_reference_ehm(assets_dir):
+def build_reference_ehm(assets_dir, uv_size=512):
     """The reference EHM exactly as GUAVA's inference constructs it (add_teeth=True)."""
     from models.modules.ehm.EHM import EHM
 
     assets_dir = Path(assets_dir)
-    return EHM(str(assets_dir / "FLAME"), str(assets_dir / "SMPLX"), add_teeth=True)
+    return EHM(str(assets_dir / "FLAME"), str(assets_dir / "SMPLX"), add_teeth=True,
+               uv_size=uv_size)
 
 
 def ehm_arrays(ehm):
@@ -86,6 +90,8 @@ def ehm_arrays(ehm):
         "flame_weights": f32(flame.lbs_weights),
         "flame_l_eyelid": f32(flame.l_eyelid[0]),
         "flame_r_eyelid": f32(flame.r_eyelid[0]),
+        "uv_texel_face": i32(smplx.uvmap_f_idx),
+        "uv_texel_bary": f32(smplx.uvmap_f_bary),
     }
 
 

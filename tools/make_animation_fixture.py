@@ -26,7 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from convert_ehm import build_reference_ehm, ehm_arrays, write_npz  # noqa: E402
-from make_ehm_fixture import SEED, parameter_cases, write_synthetic_assets  # noqa: E402
+from make_ehm_fixture import SEED, UV_SIZE, parameter_cases, write_synthetic_assets  # noqa: E402
 from reference_env import import_guava  # noqa: E402
 
 CASES = [1, 2]  # "random" and "extreme" of ehm_parity.npz
@@ -50,7 +50,7 @@ def main():
     rng = np.random.default_rng(SEED)
     with tempfile.TemporaryDirectory() as tmp:
         write_synthetic_assets(guava_root, Path(tmp), rng)
-        ehm = build_reference_ehm(Path(tmp))
+        ehm = build_reference_ehm(Path(tmp), uv_size=UV_SIZE)
     committed = np.load(data / "ehm_synthetic.npz")
     for key, value in ehm_arrays(ehm).items():
         if not np.array_equal(committed[key], value):

@@ -21,7 +21,7 @@ mod normals;
 mod points;
 mod pose;
 
-pub use ehm::{EHM_FORMAT, EhmExtras, EhmIdentity, EhmModel, EhmParams};
+pub use ehm::{EHM_FORMAT, EhmExtras, EhmIdentity, EhmModel, EhmParams, ReferenceTexels};
 pub use frames::{TriangleFrame, triangle_frames};
 pub use glb::BodyAssetError;
 pub use head_size::HEAD_SIZE;

@@ -3,10 +3,10 @@
 //! template decoder; [RGB ‖ f_map1] inverse-texture-mapped into UV space with face visibility →
 //! UV decoder → UV Gaussians bound to their texels' triangles, pruned at opacity ≤ 0.001.
 //!
-//! Where this departs from the reference (so parity with it is not bit-exact): the texel → face
-//! map is our own rasterization of the UV layout (texel centres at +½; the reference rounds
-//! corners and fills with OpenCV), and face visibility comes from our z-buffer, which leaves out
-//! triangles with a corner within 1 mm of the camera plane.
+//! Where this departs from the reference: face visibility comes from our z-buffer, which leaves
+//! out triangles with a corner within 1 mm of the camera plane (PyTorch3D's keeps them); and a
+//! body converted without the reference's texel map gets our own rasterization of its UV layout
+//! ([`uv_map`]).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -38,10 +38,23 @@ pub struct GuavaReport {
     pub pruned: usize,
 }
 
-/// The EHM body's UV layout as a texel map (its per-corner texture coordinates, v flipped as the
-/// reference flips them, so row 0 is the top of GUAVA's UV map).
+/// The EHM body's texel map at `size`²: the reference's own (OpenCV's fill, stored by
+/// `tools/convert_ehm.py`) when the body carries one of that size, else our rasterization of its
+/// per-corner texture coordinates (v flipped as the reference flips them, so row 0 is the top of
+/// GUAVA's UV map), which differs from OpenCV's on boundary texels.
 pub fn uv_map(body: &EhmModel, size: u32) -> UvMap {
-    UvMap::new(&body.texcoords, &body.triangle_uvs, size)
+    match &body.reference_texels {
+        Some(r) if r.size == size => UvMap {
+            size,
+            texels: (0..r.triangle.len() as u32)
+                .filter(|&i| r.triangle[i as usize] >= 0)
+                .collect(),
+            triangle: r.triangle.clone(),
+            bary: r.bary.clone(),
+            mirror: vec![-1; r.triangle.len()],
+        },
+        _ => UvMap::new(&body.texcoords, &body.triangle_uvs, size),
+    }
 }
 
 /// Reconstructs `image` (already at the encoder's size, masked) seen from `view` on `body`.

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use glam::{Vec2, Vec3};
 
-use super::{EhmIdentity, EhmModel, Skinned};
+use super::{EhmIdentity, EhmModel, ReferenceTexels, Skinned};
 use crate::body::SMPLX_JOINTS;
 use crate::npz::{Npz, NpzError};
 
@@ -53,6 +53,7 @@ impl EhmModel {
                 triangles.len()
             )));
         }
+        let triangle_count = triangles.len();
         let ids = |name: &str, len: usize, bound: usize| -> Result<Vec<u32>, NpzError> {
             let (v, _) = npz.indices(name, &[Some(len)], 0..bound as i64)?;
             Ok(v.iter().map(|&i| i as u32).collect())
@@ -78,12 +79,33 @@ impl EhmModel {
             hand_centres: [centre("left_hand_center")?, centre("right_hand_center")?],
             eyelids: [eyelid("flame_l_eyelid")?, eyelid("flame_r_eyelid")?],
             identity: EhmIdentity::default(),
+            reference_texels: reference_texels(npz, triangle_count)?,
             parameter_names: Self::make_parameter_names(n_shape, n_exp),
             shape_caches: Default::default(),
             body,
             head,
         })
     }
+}
+
+/// The optional `uv_texel_face` / `uv_texel_bary` pair (older files have neither).
+fn reference_texels(npz: &Npz, triangles: usize) -> Result<Option<ReferenceTexels>, NpzError> {
+    if !npz.contains("uv_texel_face") && !npz.contains("uv_texel_bary") {
+        return Ok(None);
+    }
+    let (face, shape) = npz.indices("uv_texel_face", &[None, None], -1..triangles as i64)?;
+    let size = shape[0];
+    if shape[1] != size {
+        return Err(npz.error(format!(
+            "uv_texel_face: shape {shape:?}, expected a square map"
+        )));
+    }
+    let (bary, _) = npz.f32s("uv_texel_bary", &[Some(size), Some(size), Some(3)])?;
+    Ok(Some(ReferenceTexels {
+        size: size as u32,
+        triangle: face.iter().map(|&f| f as i32).collect(),
+        bary: bary.chunks_exact(3).map(|b| [b[0], b[1], b[2]]).collect(),
+    }))
 }
 
 fn vec3s(data: &[f32]) -> Vec<Vec3> {

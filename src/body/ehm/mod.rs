@@ -44,6 +44,15 @@ pub struct Skinned {
     pub weights: Vec<Vec<(u16, f32)>>,
 }
 
+/// GUAVA's texel → triangle map (`SMPLX.uvmap_f_idx`, `uvmap_f_bary`) as its start-up
+/// rasterizes it with OpenCV: `size`² texels row-major, triangle −1 where empty.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReferenceTexels {
+    pub size: u32,
+    pub triangle: Vec<i32>,
+    pub bary: Vec<[f32; 3]>,
+}
+
 /// The converted EHM (see `tools/convert_ehm.py` for the file layout).
 #[derive(Clone, Debug)]
 pub struct EhmModel {
@@ -64,6 +73,8 @@ pub struct EhmModel {
     pub eyelids: [Vec<Vec3>; 2],
     /// Per-avatar identity used by [`Posable::pose`] (the tracker's `id_share_params`).
     pub identity: EhmIdentity,
+    /// The reference's own UV texel map, when the converter stored it.
+    pub reference_texels: Option<ReferenceTexels>,
     parameter_names: Vec<String>,
     shape_caches: ShapeCaches,
 }
