@@ -154,6 +154,56 @@ def build(cfg, guava):
     return net
 
 
+def check_vit(vit, cfg):
+    """Our ViT against Hugging Face's independent port of DINOv2 (`transformers.Dinov2Model`)
+    with the same weights: the last five blocks' outputs after the final LayerNorm, patch tokens.
+    LayerScale and LayerNorm parameters are randomised first so every parameter matters."""
+    import torch
+    from transformers import Dinov2Config, Dinov2Model
+
+    with torch.no_grad():
+        for name, p in vit.named_parameters():
+            if "gamma" in name or "norm" in name:
+                p.copy_(torch.randn_like(p) * 0.5 + (1.0 if name.endswith(("gamma", "weight")) else 0.0))
+    config = Dinov2Config(hidden_size=cfg["vit_dim"], num_hidden_layers=cfg["vit_depth"],
+                          num_attention_heads=cfg["vit_heads"], mlp_ratio=4, patch_size=14,
+                          image_size=cfg["image"], layerscale_value=1.0, layer_norm_eps=1e-6,
+                          hidden_act="gelu", qkv_bias=True, use_swiglu_ffn=False)
+    hf = Dinov2Model(config).eval()
+    ours = dict(vit.named_parameters())
+    mapped = {
+        "embeddings.cls_token": ours["cls_token"], "embeddings.mask_token": ours["mask_token"],
+        "embeddings.position_embeddings": ours["pos_embed"],
+        "embeddings.patch_embeddings.projection.weight": ours["patch_embed.proj.weight"],
+        "embeddings.patch_embeddings.projection.bias": ours["patch_embed.proj.bias"],
+        "layernorm.weight": ours["norm.weight"], "layernorm.bias": ours["norm.bias"],
+    }
+    for i in range(cfg["vit_depth"]):
+        b, h = f"blocks.{i}.", f"encoder.layer.{i}."
+        q, k, v = ours[b + "attn.qkv.weight"].chunk(3)
+        qb, kb, vb = ours[b + "attn.qkv.bias"].chunk(3)
+        for part, (w, bias) in zip(["query", "key", "value"], [(q, qb), (k, kb), (v, vb)]):
+            mapped[h + f"attention.attention.{part}.weight"] = w
+            mapped[h + f"attention.attention.{part}.bias"] = bias
+        for theirs, mine in [("attention.output.dense", "attn.proj"), ("norm1", "norm1"),
+                             ("norm2", "norm2"), ("mlp.fc1", "mlp.fc1"), ("mlp.fc2", "mlp.fc2")]:
+            mapped[h + theirs + ".weight"] = ours[b + mine + ".weight"]
+            mapped[h + theirs + ".bias"] = ours[b + mine + ".bias"]
+        mapped[h + "layer_scale1.lambda1"] = ours[b + "ls1.gamma"]
+        mapped[h + "layer_scale2.lambda1"] = ours[b + "ls2.gamma"]
+    missing = set(hf.state_dict()) - set(mapped)
+    assert not missing, f"unmapped Hugging Face parameters: {sorted(missing)}"
+    hf.load_state_dict({k: v.detach().reshape(hf.state_dict()[k].shape) for k, v in mapped.items()})
+    image = torch.rand(1, 3, cfg["image"], cfg["image"], generator=torch.Generator().manual_seed(5))
+    with torch.no_grad():
+        mine = vit.get_intermediate_layers(image, 5)
+        hidden = hf(image, output_hidden_states=True).hidden_states
+        theirs = [hf.layernorm(x)[:, 1:] for x in hidden[-5:]]
+    worst = max((a - b).abs().max().item() / b.abs().max().item() for a, b in zip(mine, theirs))
+    print(f"ViT vs transformers.Dinov2Model: max relative difference {worst:.2e} over 5 blocks")
+    assert worst < 1e-5, "our ViT is not DINOv2's"
+
+
 def reduce_dino_head(dino, vit_dim, dims, hidden):
     """The DPT head of DINO_Enocder with its hard-coded (256, 512, 1024, 1024) widths replaced:
     the same layers (dino_encoder.py:21-39), fewer channels."""
@@ -279,6 +329,8 @@ def main():
     parser.add_argument("--reduced", action="store_true", help="reduced widths (with --random)")
     parser.add_argument("--out", required=True, help="folder for the three .onnx files")
     parser.add_argument("--fixture", help="also save inputs and PyTorch outputs here (.npz)")
+    parser.add_argument("--check-vit", action="store_true",
+                        help="only check our DINOv2 ViT against transformers.Dinov2Model, then exit")
     args = parser.parse_args()
     if args.reduced and args.checkpoint:
         parser.error("--reduced goes with --random (the checkpoint has GUAVA's widths)")
@@ -292,6 +344,9 @@ def main():
     if args.random is not None:
         torch.manual_seed(args.random)
     net = build(cfg, args.guava).eval()
+    if args.check_vit:
+        check_vit(net.dino_encoder.dino_model, cfg)
+        return
     if args.checkpoint:
         state = torch.load(args.checkpoint, map_location="cpu", weights_only=False)["model"]
         wanted = net.state_dict()
