@@ -229,3 +229,52 @@ fn reconstruction_with_reduced_networks_animates_and_refuses_mismatches() {
     .expect_err("cancelled");
     assert!(matches!(err, ReconstructError::Cancelled));
 }
+
+#[test]
+fn extreme_views_and_nan_poses_give_finite_avatars_or_clear_errors() {
+    let model = model();
+    let mut models = models();
+    let d = models.dims;
+    let uv = uv_map(&model, d.uv as u32);
+    let photo = photo(d.image as u32);
+    let finite = |a: &guava::avatar::Avatar| {
+        let t = &a.template;
+        let u = &a.uv.local;
+        t.features.iter().chain(&u.features).all(|v| v.is_finite())
+            && t.scales
+                .iter()
+                .chain(&u.scales)
+                .flatten()
+                .all(|v| v.is_finite())
+            && a.uv.offsets.iter().flatten().all(|v| v.is_finite())
+    };
+    let run = |models: &mut GuavaModels, view: &SourceView| {
+        reconstruct_guava(models, &model, &uv, view, &photo, "x", &mut |_| true)
+    };
+
+    // NaN and infinite joint angles: EHM treats them as zero and counts them.
+    let mut nan_view = view(&model);
+    nan_view.pose.rotations[3] = Vec3::new(f32::NAN, f32::INFINITY, 0.0);
+    let (avatar, _) = run(&mut models, &nan_view).expect("NaN pose still reconstructs");
+    assert!(finite(&avatar));
+
+    // The camera inside the body (at the pelvis, z = 0 on some vertices): projection divides by
+    // z + 1e-7 and sampling clamps or zero-pads, so features stay finite.
+    let mut inside = view(&model);
+    inside.camera.view_from_world = Mat4::from_cols_array_2d(&[
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, -1.0, 0.0, 0.0],
+        [0.0, 0.0, -1.0, 0.0],
+        [0.0, 0.0, 0.0, 1.0],
+    ]);
+    match run(&mut models, &inside) {
+        Ok((avatar, _)) => assert!(finite(&avatar)),
+        Err(e) => assert!(matches!(e, ReconstructError::NothingVisible), "{e}"),
+    }
+
+    // Looking away from the body: nothing visible is a clear error, not an empty avatar.
+    let mut away = view(&model);
+    away.camera.view_from_world = Mat4::from_translation(Vec3::new(0.0, 0.0, -22.0));
+    let err = run(&mut models, &away).expect_err("nothing visible");
+    assert!(matches!(err, ReconstructError::NothingVisible), "{err}");
+}
