@@ -109,14 +109,22 @@ fn main(
         tile_bound(xy.x + radius + tile_extra, frame.tiles.x),
         tile_bound(xy.y + radius + tile_extra, frame.tiles.y),
     );
-    let area = (rmax.x - rmin.x) * (rmax.y - rmin.y);
-    if area == 0u {
+    if (rmax.x - rmin.x) * (rmax.y - rmin.y) == 0u {
         atomicAdd(&stats[STAT_OUTSIDE], 1u);
         return;
     }
+    let conic_opacity = vec4<f32>(conic, g.opacity);
+    // The reference lists every tile of the 3σ rectangle; only those the splat can reach matter
+    // (it still counts as visible when it reaches none, as in the reference).
+    var area = 0u;
+    for (var ty = rmin.y; ty < rmax.y; ty++) {
+        for (var tx = rmin.x; tx < rmax.x; tx++) {
+            area += u32(tile_reached(xy, conic_opacity, vec2<u32>(tx, ty)));
+        }
+    }
 
     var p: Projected;
-    p.conic_opacity = vec4<f32>(conic, g.opacity);
+    p.conic_opacity = conic_opacity;
     p.xy = xy;
     p.depth = t.z;
     p.rect_min = rmin.x | (rmin.y << 16u);

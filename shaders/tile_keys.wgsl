@@ -55,6 +55,9 @@ fn emit_keys(
     var off = pair_offsets[i];
     for (var y = rmin.y; y < rmax.y; y++) {
         for (var x = rmin.x; x < rmax.x; x++) {
+            if !tile_reached(p.xy, p.conic_opacity, vec2<u32>(x, y)) {
+                continue;
+            }
             // Pairs past the capacity are dropped; the host sees needed > kept and grows.
             if off >= frame.pair_capacity {
                 return;

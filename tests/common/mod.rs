@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use guava::gpu::GpuContext;
-use guava::render::{HeadlessRenderer, RasterTuning, SplatImage};
+use guava::render::{HeadlessRenderer, RasterTuning, RenderStats, SplatImage};
 
 /// A renderer on the test machine's adapter (lavapipe in CI). Validation errors panic (wgpu's
 /// default uncaptured-error handler), so any invalid GPU use fails the test.
@@ -21,6 +21,33 @@ pub fn renderers() -> Vec<HeadlessRenderer> {
     [1, 4]
         .map(|p| HeadlessRenderer::with_tuning(gpu(), RasterTuning::PixelsPerThread(p)))
         .into()
+}
+
+/// The pass's counters against the f64 reference's: every culling count equal; tile pairs no
+/// more than the reference's, which lists every tile of a splat's 3σ rectangle where the pass
+/// lists only the tiles the splat can reach at α ≥ 1/255 (`tile_reached` in common.wgsl; the
+/// image comparisons check that leaving the others out changes no pixel).
+pub fn assert_stats_match(name: &str, gpu: &RenderStats, reference: &RenderStats) {
+    let counts = |s: &RenderStats| RenderStats {
+        tile_pairs: 0,
+        tile_pairs_needed: 0,
+        ..*s
+    };
+    assert_eq!(
+        counts(gpu),
+        counts(reference),
+        "{name}: culling counts must match the reference"
+    );
+    assert!(
+        gpu.tile_pairs <= reference.tile_pairs && gpu.tile_pairs == gpu.tile_pairs_needed,
+        "{name}: {} tile pairs, the reference's rectangles give {}",
+        gpu.tile_pairs,
+        reference.tile_pairs
+    );
+    println!(
+        "{name}: {} of the reference's {} tile pairs",
+        gpu.tile_pairs, reference.tile_pairs
+    );
 }
 
 /// Comparison of two renders over every feature channel, alpha and inverse depth.
