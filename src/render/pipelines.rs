@@ -79,13 +79,15 @@ fn compute_pipeline(
 /// CPU adapters (lavapipe) a load from workgroup memory costs far more than the arithmetic, so
 /// each thread shades several pixels of a column and reuses every Gaussian it loads; but the
 /// per-pixel accumulators then multiply, which costs more than it saves for many channels.
-/// Measured on lavapipe (10k Gaussians, 512², `guava bench splat`): 3 channels 813 → 342 ms
-/// rasterizing with 4 pixels per thread; 32 channels fastest with 1.
+/// Measured on lavapipe (`guava bench splat`): 10k Gaussians, 512², 3 channels 813 → 342 ms
+/// rasterizing with 4 pixels per thread; 150k, 512², 3 channels, frames of 1,453–1,501 ms with 4,
+/// 1,307–1,487 with 8, 1,156–1,234 with 16 (a whole column per thread); 32 channels fastest
+/// with 1 (2 per thread: 8,110–8,199 ms against 6,374–6,558).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RasterTuning {
     /// The same count for every channel count: 1, 2, 4, 8 or 16 (divisors of the tile side).
     PixelsPerThread(u32),
-    /// 4 pixels per thread up to 4 channels, 1 above.
+    /// 16 pixels per thread (a tile column) up to 4 channels, 1 above.
     Cpu,
 }
 
@@ -101,7 +103,7 @@ impl RasterTuning {
     pub fn pixels_per_thread(self, channels: u32) -> u32 {
         match self {
             Self::PixelsPerThread(p) => p,
-            Self::Cpu if channels <= 4 => 4,
+            Self::Cpu if channels <= 4 => 16,
             Self::Cpu => 1,
         }
     }
