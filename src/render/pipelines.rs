@@ -81,13 +81,14 @@ fn compute_pipeline(
 /// per-pixel accumulators then multiply, which costs more than it saves for many channels.
 /// Measured on lavapipe (`guava bench splat`): 10k Gaussians, 512², 3 channels 813 → 342 ms
 /// rasterizing with 4 pixels per thread; 150k, 512², 3 channels, frames of 1,453–1,501 ms with 4,
-/// 1,307–1,487 with 8, 1,156–1,234 with 16 (a whole column per thread); 32 channels fastest
-/// with 1 (2 per thread: 8,110–8,199 ms against 6,374–6,558).
+/// 1,307–1,324 with 8; 32 channels fastest with 1 (2 per thread: 8,110–8,199 ms against
+/// 6,374–6,558). 16 (a whole column per thread, 1,156–1,234 ms) drew one tile of the demo
+/// portrait's avatar wrong on lavapipe (rows 1–15 of a tile; cause not found), so it is not used.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RasterTuning {
     /// The same count for every channel count: 1, 2, 4, 8 or 16 (divisors of the tile side).
     PixelsPerThread(u32),
-    /// 16 pixels per thread (a tile column) up to 4 channels, 1 above.
+    /// 8 pixels per thread up to 4 channels, 1 above.
     Cpu,
 }
 
@@ -103,7 +104,7 @@ impl RasterTuning {
     pub fn pixels_per_thread(self, channels: u32) -> u32 {
         match self {
             Self::PixelsPerThread(p) => p,
-            Self::Cpu if channels <= 4 => 16,
+            Self::Cpu if channels <= 4 => 8,
             Self::Cpu => 1,
         }
     }
