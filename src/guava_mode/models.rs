@@ -149,7 +149,7 @@ pub struct Dims {
     pub colors: usize,
 }
 
-/// Checks the three models' declarations against [`interface`] and each other; every problem
+/// Checks the three models' declarations against the interface the exporter writes and each other; every problem
 /// found, each naming its file.
 pub fn check(infos: &BTreeMap<Role, ModelInfo>) -> Result<Dims, Vec<String>> {
     let mut problems = Vec::new();
