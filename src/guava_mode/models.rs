@@ -149,8 +149,8 @@ pub struct Dims {
     pub colors: usize,
 }
 
-/// Checks the three models' declarations against the interface the exporter writes and each other; every problem
-/// found, each naming its file.
+/// Checks the three models' declarations against the interface the exporter writes and against
+/// each other; every problem found, each naming its file.
 pub fn check(infos: &BTreeMap<Role, ModelInfo>) -> Result<Dims, Vec<String>> {
     let mut problems = Vec::new();
     let mut named: BTreeMap<char, (i64, String)> = BTreeMap::new();
