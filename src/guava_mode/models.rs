@@ -258,7 +258,8 @@ pub enum GuavaModelsError {
 
 /// The image's features: what the encoder gives, one image at a time.
 pub struct Encoded {
-    /// [`Dims::pixel_channels`] planes of [`Dims::features`]²: RGB (the image resized) then f_map1.
+    /// [`Dims::pixel_channels`] planes of [`Dims::features`]²: RGB (the image resized), then
+    /// f_map1.
     pub pixel_features: Vec<f32>,
     /// [`Dims::vertex_channels`] planes of [`Dims::features`]² (f_map2).
     pub vertex_features: Vec<f32>,

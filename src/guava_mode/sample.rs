@@ -35,7 +35,8 @@ pub fn grid_sample(
     if !ndc.is_finite() {
         return;
     }
-    // align_corners=False: ndc −1 is the left edge of pixel 0, pixel i's centre (2i + 1)/side − 1.
+    // align_corners=False: ndc −1 is the left edge of pixel 0; pixel i's centre is at
+    // (2i + 1)/side − 1.
     let unnormalise = |v: f32| {
         let p = ((v + 1.0) * side as f32 - 1.0) / 2.0;
         match padding {
