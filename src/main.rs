@@ -419,16 +419,7 @@ fn reconstruct(
             eprintln!("  {}…", stage.name());
             true
         })?;
-    avatar.save(out)?;
-    println!(
-        "{}: {} ({} template + {} UV Gaussians, {} channels) → {}",
-        image.display(),
-        avatar.kind.label(),
-        avatar.template.len(),
-        avatar.uv.local.len(),
-        avatar.channels,
-        out.display()
-    );
+    save_avatar(&avatar, image, out, "")?;
     if let Some(f) = &report.fit {
         print_fit(f);
     }
@@ -448,6 +439,26 @@ fn reconstruct(
         println!("  {:32} {:8.1} ms", stage.name(), d.as_secs_f64() * 1e3);
     }
     println!("  {:32} {:8.1} ms", "total", total * 1e3);
+    Ok(())
+}
+
+/// Writes `avatar` to `out` and says what it is; `extra` follows the channel count.
+fn save_avatar(
+    avatar: &guava::avatar::Avatar,
+    image: &Path,
+    out: &Path,
+    extra: &str,
+) -> Result<()> {
+    avatar.save(out)?;
+    println!(
+        "{}: {} ({} template + {} UV Gaussians, {} channels{extra}) → {}",
+        image.display(),
+        avatar.kind.label(),
+        avatar.template.len(),
+        avatar.uv.local.len(),
+        avatar.channels,
+        out.display()
+    );
     Ok(())
 }
 
@@ -486,19 +497,11 @@ fn reconstruct_guava(
             true
         },
     )?;
-    avatar.save(out)?;
-    println!(
-        "{}: {} ({} template + {} UV Gaussians, {} channels; {} texels, {} on visible faces, {} pruned) → {}",
-        image.display(),
-        avatar.kind.label(),
-        avatar.template.len(),
-        avatar.uv.local.len(),
-        avatar.channels,
-        report.texels,
-        report.observed_texels,
-        report.pruned,
-        out.display()
+    let counts = format!(
+        "; {} texels, {} on visible faces, {} pruned",
+        report.texels, report.observed_texels, report.pruned
     );
+    save_avatar(&avatar, image, out, &counts)?;
     for (stage, d) in &report.timings {
         println!("  {:32} {:8.1} ms", stage.name(), d.as_secs_f64() * 1e3);
     }

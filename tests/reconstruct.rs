@@ -33,6 +33,17 @@ fn reconstruct(
     reconstruct_default(body(), uv(), view, source, "synthetic.png", &mut |_| true)
 }
 
+/// The default body at rest, seen from the front, and its synthetic photo.
+fn rest_photo() -> (SourceView, image::RgbaImage) {
+    let body = body();
+    let view = SourceView {
+        pose: BodyPose::rest(body),
+        camera: upper_body_camera(body, 0.0),
+    };
+    let image = photo(body, &view.pose, &view.camera, banded_texture).expect("photo");
+    (view, image)
+}
+
 fn cloud_for(avatar: &Avatar, pose: &BodyPose) -> GaussianCloud {
     let mut posed = PosedBody::default();
     body().pose(pose, &mut posed).expect("pose");
@@ -262,11 +273,7 @@ fn hidden_texels_get_no_colour_from_the_occluder() {
 #[test]
 fn animation_follows_a_rigid_motion_exactly() {
     let body = body();
-    let view = SourceView {
-        pose: BodyPose::rest(body),
-        camera: upper_body_camera(body, 0.0),
-    };
-    let image = photo(body, &view.pose, &view.camera, banded_texture).expect("photo");
+    let (view, image) = rest_photo();
     let (avatar, _) = reconstruct(&view, &image).expect("reconstruct");
     let rest = cloud_for(&avatar, &view.pose);
     let mut moved_pose = view.pose.clone();
@@ -311,11 +318,7 @@ fn animation_follows_a_rigid_motion_exactly() {
 #[test]
 fn degenerate_inputs_give_errors_or_sane_results() {
     let body = body();
-    let view = SourceView {
-        pose: BodyPose::rest(body),
-        camera: upper_body_camera(body, 0.0),
-    };
-    let image = photo(body, &view.pose, &view.camera, banded_texture).expect("photo");
+    let (view, image) = rest_photo();
 
     // Fully transparent alpha.
     let clear = image::RgbaImage::new(600, 400);
@@ -462,11 +465,7 @@ fn avatar_file_round_trips_bit_identically_and_names_bad_fields() {
 fn thread_layouts_agree_on_an_animated_avatar() {
     use guava::render::{HeadlessRenderer, RasterTuning};
     let body = body();
-    let view = SourceView {
-        pose: BodyPose::rest(body),
-        camera: upper_body_camera(body, 0.0),
-    };
-    let image = photo(body, &view.pose, &view.camera, banded_texture).expect("photo");
+    let (view, image) = rest_photo();
     let (avatar, _) = reconstruct(&view, &image).expect("reconstruct");
     let motion = guava::tracking::demo_motion().expect("demo motion");
     let mut pose = BodyPose::rest(body);

@@ -19,14 +19,13 @@ plyfile, omegaconf, colored, rich; not needed by CI):
 
 import argparse
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from convert_ehm import build_reference_ehm, ehm_arrays, write_npz  # noqa: E402
-from make_ehm_fixture import SEED, UV_SIZE, parameter_cases, write_synthetic_assets  # noqa: E402
+from convert_ehm import ehm_arrays, write_npz  # noqa: E402
+from make_ehm_fixture import synthetic_ehm  # noqa: E402
 from reference_env import import_guava  # noqa: E402
 
 CASES = [1, 2]  # "random" and "extreme" of ehm_parity.npz
@@ -46,16 +45,11 @@ def main():
     from models.UbodyAvatar.ubody_gaussian import Ubody_Gaussian
 
     torch.set_float32_matmul_precision("highest")
-    # The same draws, in the same order, as make_ehm_fixture.py: the same model and cases.
-    rng = np.random.default_rng(SEED)
-    with tempfile.TemporaryDirectory() as tmp:
-        write_synthetic_assets(guava_root, Path(tmp), rng)
-        ehm = build_reference_ehm(Path(tmp), uv_size=UV_SIZE)
+    ehm, cases = synthetic_ehm(guava_root)
     committed = np.load(data / "ehm_synthetic.npz")
     for key, value in ehm_arrays(ehm).items():
         if not np.array_equal(committed[key], value):
             sys.exit(f"the rebuilt synthetic EHM differs from tests/data/ehm_synthetic.npz in {key}")
-    cases = parameter_cases(rng)
 
     g = torch.Generator().manual_seed(7)
     n = ehm.smplx.v_template.shape[0]

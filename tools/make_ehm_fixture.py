@@ -169,6 +169,16 @@ def parameter_cases(rng):
     ]
 
 
+def synthetic_ehm(guava_root, uv_size=UV_SIZE):
+    """The synthetic reference EHM and the parameter cases, from the same draws in the same order
+    as main() (the other fixture scripts pose the same model)."""
+    rng = np.random.default_rng(SEED)
+    with tempfile.TemporaryDirectory() as tmp:
+        write_synthetic_assets(guava_root, Path(tmp), rng)
+        ehm = build_reference_ehm(Path(tmp), uv_size=uv_size)
+    return ehm, parameter_cases(rng)
+
+
 def reference_forward(ehm, body, flame):
     import torch
 
@@ -187,14 +197,10 @@ def main():
     import torch
 
     torch.set_float32_matmul_precision("highest")
-    rng = np.random.default_rng(SEED)
     out_dir = Path(args.out_dir)
-    with tempfile.TemporaryDirectory() as tmp:
-        write_synthetic_assets(guava_root, Path(tmp), rng)
-        ehm = build_reference_ehm(Path(tmp), uv_size=UV_SIZE)
+    ehm, cases = synthetic_ehm(guava_root)
     write_npz(out_dir / "ehm_synthetic.npz", ehm_arrays(ehm), mode=0o644)
 
-    cases = parameter_cases(rng)
     fixture = {"case_names": np.array([name for name, _, _ in cases])}
     outputs = [reference_forward(ehm, body, flame) for _, body, flame in cases]
     for key in cases[0][1]:

@@ -18,7 +18,6 @@ Regenerate (needs PyTorch on CPU and the packages tools/make_animation_fixture.p
 
 import argparse
 import sys
-import tempfile
 import types
 from pathlib import Path
 
@@ -26,7 +25,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from convert_ehm import write_npz  # noqa: E402
-from make_ehm_fixture import SEED, parameter_cases, write_synthetic_assets  # noqa: E402
+from make_ehm_fixture import synthetic_ehm  # noqa: E402
 from reference_env import import_guava  # noqa: E402
 
 UV_SIZE = 64
@@ -47,16 +46,11 @@ def main():
     args = parser.parse_args()
     guava_root = import_guava(args.guava)
     import torch
-    from models.modules.ehm.EHM import EHM
     from models.UbodyAvatar.ubody_gaussian import Ubody_Gaussian_inferer as Inferer
 
     torch.set_float32_matmul_precision("highest")
-    rng = np.random.default_rng(SEED)  # the same model and cases as make_ehm_fixture.py
-    with tempfile.TemporaryDirectory() as tmp:
-        write_synthetic_assets(guava_root, Path(tmp), rng)
-        ehm = EHM(str(Path(tmp) / "FLAME"), str(Path(tmp) / "SMPLX"), add_teeth=True,
-                  uv_size=UV_SIZE)
-    _, body, flame = parameter_cases(rng)[1]
+    ehm, cases = synthetic_ehm(guava_root, uv_size=UV_SIZE)
+    _, body, flame = cases[1]
 
     def batch(d):
         return {k: torch.tensor(np.asarray(v, dtype=np.float32))[None] for k, v in d.items()}
