@@ -25,10 +25,12 @@ const ROWS: u32 = TILE_SIZE / PIXELS;
 const BATCH: u32 = TILE_SIZE * ROWS;
 const TILE_PIXELS: u32 = TILE_SIZE * TILE_SIZE;
 
-var<workgroup> batch_id: array<u32, BATCH>;
-var<workgroup> batch_xy: array<vec2<f32>, BATCH>;
+// Per batched Gaussian, two vec4 loads in the per-pixel loop instead of four (each load from
+// workgroup memory is the expensive part on CPU adapters): (x, y, 1/depth as bits, id) and
+// (conic, opacity). Floats ride as u32 bits, not the id as float bits: small ids are subnormal
+// floats, which some GPUs flush to zero.
+var<workgroup> batch_xy_depth_id: array<vec4<u32>, BATCH>;
 var<workgroup> batch_conic_opacity: array<vec4<f32>, BATCH>;
-var<workgroup> batch_inv_depth: array<f32, BATCH>;
 var<workgroup> num_done: atomic<u32>;
 var<workgroup> done_snapshot: u32;
 
@@ -72,18 +74,17 @@ fn main(
         if fetch < range.y {
             let id = tile_vals[fetch];
             let p = projected[id];
-            batch_id[lid] = id;
-            batch_xy[lid] = p.xy;
+            batch_xy_depth_id[lid] = vec4<u32>(bitcast<vec2<u32>>(p.xy), bitcast<u32>(1.0 / p.depth), id);
             batch_conic_opacity[lid] = p.conic_opacity;
-            batch_inv_depth[lid] = 1.0 / p.depth;
         }
         workgroupBarrier();
         let n = min(BATCH, range.y - start);
         for (var j = 0u; j < n && pending > 0u; j++) {
-            let xy = batch_xy[j];
+            let packed = batch_xy_depth_id[j];
+            let xy = bitcast<vec2<f32>>(packed.xy);
             let co = batch_conic_opacity[j];
-            let gaussian_inv_depth = batch_inv_depth[j];
-            let base = batch_id[j] * CHANNELS;
+            let gaussian_inv_depth = bitcast<f32>(packed.z);
+            let base = packed.w * CHANNELS;
             for (var k = 0u; k < PIXELS; k++) {
                 if done[k] {
                     continue;
