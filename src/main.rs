@@ -178,30 +178,18 @@ fn run(cli: Cli) -> Result<()> {
                 (None, Some(avatar)) => {
                     let avatar_file = guava::avatar::Avatar::load(&avatar)?;
                     let (cloud, camera) = match ehm {
-                        Some(ehm) => {
-                            let body = guava::body::EhmModel::load(&ehm)?;
-                            let (name, vertices) = (body.name.clone(), body.body.template.len());
-                            posed_avatar(
-                                &avatar_file,
-                                &body,
-                                &name,
-                                vertices,
-                                motion.as_deref(),
-                                time,
-                            )
-                        }
-                        None => {
-                            let body = guava::body::BodyModel::default_body()?;
-                            let (name, vertices) = (body.name.clone(), body.vertices.len());
-                            posed_avatar(
-                                &avatar_file,
-                                &body,
-                                &name,
-                                vertices,
-                                motion.as_deref(),
-                                time,
-                            )
-                        }
+                        Some(ehm) => posed_avatar(
+                            &avatar_file,
+                            &guava::body::EhmModel::load(&ehm)?,
+                            motion.as_deref(),
+                            time,
+                        ),
+                        None => posed_avatar(
+                            &avatar_file,
+                            &guava::body::BodyModel::default_body()?,
+                            motion.as_deref(),
+                            time,
+                        ),
                     }
                     .with_context(|| avatar.display().to_string())?;
                     (
@@ -286,20 +274,16 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
-/// An avatar posed on its body (named `name`, `vertices` vertices): at rest, or by `motion` at
-/// `time` (then also the motion's tracked camera at that time, if it has one).
+/// An avatar posed on its body: at rest, or by `motion` at `time` (then also the motion's tracked
+/// camera at that time, if it has one).
 fn posed_avatar(
     avatar: &guava::avatar::Avatar,
     body: &impl guava::body::Posable,
-    name: &str,
-    vertices: usize,
     motion: Option<&Path>,
     time: f64,
 ) -> Result<(guava::gaussians::GaussianCloud, Option<Camera>)> {
     use guava::body::{BodyPose, PosedBody};
-    avatar
-        .check_bound(name, vertices, body)
-        .map_err(anyhow::Error::msg)?;
+    avatar.check_body(body).map_err(anyhow::Error::msg)?;
     let mut pose = BodyPose::rest(body);
     let mut camera = None;
     if let Some(motion) = motion {

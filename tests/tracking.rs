@@ -421,6 +421,12 @@ fn default_motion_onto_an_smplx_rig_reports_what_it_drops() {
         fn triangles(&self) -> &[[u32; 3]] {
             &[]
         }
+        fn name(&self) -> &str {
+            "SMPL-X joint names"
+        }
+        fn vertex_count(&self) -> usize {
+            0
+        }
         fn pose(&self, _: &BodyPose, out: &mut PosedBody) -> Result<(), guava::body::PoseError> {
             // A T-posed skeleton: the arms along ±x.
             out.joints = SMPLX_JOINTS

@@ -19,7 +19,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::body::{BodyModel, BodyPose, Posable};
+use crate::body::{BodyPose, Posable};
 
 /// Which pipeline made an avatar; shown to the user, never conflated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -91,17 +91,8 @@ pub struct Avatar {
 
 impl Avatar {
     /// Whether `body` is the model this avatar is bound to (name, size, identity parameters).
-    pub fn check_body(&self, body: &BodyModel) -> Result<(), String> {
-        self.check_bound(&body.name, body.vertices.len(), body)
-    }
-
-    /// [`Self::check_body`] for any posable model, named `name` with `vertices` vertices.
-    pub fn check_bound(
-        &self,
-        name: &str,
-        vertices: usize,
-        body: &impl Posable,
-    ) -> Result<(), String> {
+    pub fn check_body(&self, body: &impl Posable) -> Result<(), String> {
+        let (name, vertices) = (body.name(), body.vertex_count());
         let triangles = body.triangles().len();
         if name != self.body || vertices != self.body_vertices || triangles != self.body_triangles {
             return Err(format!(

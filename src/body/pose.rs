@@ -42,6 +42,9 @@ pub trait Posable {
     /// Parameter (coefficient) names; a [`BodyPose`] has one coefficient per name in this order.
     fn parameter_names(&self) -> impl ExactSizeIterator<Item = &str>;
     fn triangles(&self) -> &[[u32; 3]];
+    /// The model's name, which avatars record to say what they are bound to.
+    fn name(&self) -> &str;
+    fn vertex_count(&self) -> usize;
     /// Poses into `out` (reused across frames). Non-finite inputs are treated as zero and counted.
     fn pose(&self, pose: &BodyPose, out: &mut PosedBody) -> Result<(), PoseError>;
     /// Whether the model takes EHM's identity (joint offsets, head and hand scale).
@@ -209,6 +212,14 @@ impl Posable for BodyModel {
 
     fn triangles(&self) -> &[[u32; 3]] {
         &self.triangles
+    }
+
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn vertex_count(&self) -> usize {
+        self.vertices.len()
     }
 
     fn pose(&self, pose: &BodyPose, out: &mut PosedBody) -> Result<(), PoseError> {

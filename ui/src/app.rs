@@ -503,7 +503,7 @@ impl GuavaApp {
         let Some(body) = &mut self.body else {
             return self.error("no body to pose the avatar on".into());
         };
-        if let Err(e) = avatar.check_body(&body.model) {
+        if let Err(e) = avatar.check_body(&*body.model) {
             return self.error(format!("{}: {e}; the current view is kept", path.display()));
         }
         avatar.apply_identity(&*body.model, &mut body.pose);

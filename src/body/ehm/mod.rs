@@ -447,6 +447,14 @@ impl Posable for EhmModel {
         &self.triangles
     }
 
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn vertex_count(&self) -> usize {
+        self.body.template.len()
+    }
+
     /// [`EhmModel::forward`] on the mapped parameters.
     fn pose(&self, pose: &BodyPose, out: &mut PosedBody) -> Result<(), PoseError> {
         let params = self.params_from_pose(pose)?;
