@@ -310,10 +310,9 @@ fn activated(mut colors: Vec<f32>, channels: usize) -> Vec<f32> {
 fn identity(body: &EhmModel, coefficients: &[f32]) -> BTreeMap<String, f32> {
     body.parameter_names()
         .zip(coefficients)
-        .filter(|(name, v)| {
-            **v != 0.0 && (name.starts_with("shape_") || name.starts_with("flame_shape_"))
-        })
-        .map(|(name, &v)| (name.to_string(), v))
+        .enumerate()
+        .filter(|&(i, (_, &v))| v != 0.0 && body.is_identity_parameter(i))
+        .map(|(_, (name, &v))| (name.to_string(), v))
         .collect()
 }
 

@@ -418,6 +418,13 @@ impl EhmModel {
         })
     }
 
+    /// Whether parameter `i` (of [`Posable::parameter_names`]) is identity (SMPL-X or FLAME
+    /// shape) rather than expression or eyelids.
+    pub fn is_identity_parameter(&self, i: usize) -> bool {
+        let (s, e) = (self.n_shape, self.n_exp);
+        i < s || (s + e..2 * s + e).contains(&i)
+    }
+
     fn make_parameter_names(n_shape: usize, n_exp: usize) -> Vec<String> {
         let numbered =
             |prefix: &'static str, n: usize| (0..n).map(move |i| format!("{prefix}{i:03}"));
