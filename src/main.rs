@@ -178,12 +178,11 @@ fn run(cli: Cli) -> Result<()> {
                 (None, Some(avatar)) => {
                     let avatar_file = guava::avatar::Avatar::load(&avatar)?;
                     let (cloud, camera) = match ehm {
-                        Some(ehm) => posed_avatar(
-                            &avatar_file,
-                            &guava::body::EhmModel::load(&ehm)?,
-                            motion.as_deref(),
-                            time,
-                        ),
+                        Some(ehm) => {
+                            let mut body = guava::body::EhmModel::load(&ehm)?;
+                            avatar_file.apply_ehm_identity(&mut body);
+                            posed_avatar(&avatar_file, &body, motion.as_deref(), time)
+                        }
                         None => posed_avatar(
                             &avatar_file,
                             &guava::body::BodyModel::default_body()?,

@@ -388,6 +388,7 @@ fn animation_matches_the_reference_ubody_gaussian() {
         body_triangles: model.triangles.len(),
         channels,
         identity: Default::default(),
+        ehm_identity: None,
         source: "animation_parity.npz".into(),
         template: LocalGaussians {
             rotations: array("template_rotations", 4),

@@ -133,8 +133,8 @@ fn view(model: &EhmModel) -> SourceView {
 }
 
 /// A test card: a smooth colour ramp over a dark border, opaque where a person would stand.
-fn photo(side: u32) -> SourceImage {
-    let image = image::RgbaImage::from_fn(side * 4, side * 4, |x, y| {
+fn card(side: u32) -> image::RgbaImage {
+    image::RgbaImage::from_fn(side * 4, side * 4, |x, y| {
         let inside = (x as i32 - 2 * side as i32).abs() < side as i32;
         image::Rgba([
             (x % 256) as u8,
@@ -142,8 +142,11 @@ fn photo(side: u32) -> SourceImage {
             128,
             if inside { 255 } else { 0 },
         ])
-    });
-    SourceImage::from_rgba_at(&image, true, "card.png", side).expect("image")
+    })
+}
+
+fn photo(side: u32) -> SourceImage {
+    SourceImage::from_rgba_at(&card(side), true, "card.png", side).expect("image")
 }
 
 #[test]
@@ -278,4 +281,110 @@ fn extreme_views_and_nan_poses_give_finite_avatars_or_clear_errors() {
     away.camera.view_from_world = Mat4::from_translation(Vec3::new(0.0, 0.0, -22.0));
     let err = run(&mut models, &away).expect_err("nothing visible");
     assert!(matches!(err, ReconstructError::NothingVisible), "{err}");
+}
+
+/// The tracker's skeleton (joint offsets, head and hand scale) belongs to the person: the file
+/// path builds the body with the tracking's, the avatar keeps it through its file and poses with
+/// it, and a broken one is refused by name.
+#[test]
+fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
+    use guava::avatar::Avatar;
+    use guava::guava_mode::reconstruct_guava_file;
+    use guava::tracking::{BodyKind, EhmIdentityRecord, Frame, TrackedCamera, Tracking};
+
+    let mut model = model();
+    let mut models = models();
+    let d = models.dims;
+    let uv = uv_map(&model, d.uv as u32);
+    let dir = std::env::temp_dir().join(format!("guava-ehm-identity-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let (photo_path, tracking_path) = (dir.join("card.png"), dir.join("card.json"));
+    card(d.image as u32).save(&photo_path).expect("photo");
+    let mut identity = EhmIdentityRecord::of(&Default::default());
+    identity.head_scale = [1.4, 1.3, 1.2];
+    identity.joints_offset[16] = [0.0, 0.05, 0.0];
+    let tracking = |ehm: Option<EhmIdentityRecord>| {
+        let mut t = Tracking::new(
+            BodyKind::Smplx,
+            30.0,
+            model.joint_names().map(String::from).collect(),
+            Vec::new(),
+        );
+        t.identity.ehm = ehm;
+        t.frames.push(Frame {
+            translation: [0.0; 3],
+            rotations: vec![[0.0; 3]; model.joint_names().len()],
+            values: Vec::new(),
+            camera: Some(TrackedCamera {
+                w2c: [
+                    [1.0, 0.0, 0.0, 0.0],
+                    [0.0, -1.0, 0.0, 0.2],
+                    [0.0, 0.0, -1.0, 22.0],
+                ],
+                invtanfov: 24.0,
+            }),
+        });
+        t
+    };
+    let mut run = |ehm: Option<EhmIdentityRecord>| {
+        tracking(ehm).save(&tracking_path).expect("tracking");
+        reconstruct_guava_file(
+            &mut models,
+            &model,
+            &uv,
+            &photo_path,
+            &tracking_path,
+            None,
+            &mut |_| true,
+        )
+        .expect("reconstructs")
+        .0
+    };
+    let tracked = run(Some(identity.clone()));
+    let neutral = run(None);
+    assert_eq!(tracked.ehm_identity.as_ref(), Some(&identity));
+    assert_eq!(
+        neutral.ehm_identity,
+        Some(EhmIdentityRecord::of(&Default::default()))
+    );
+    // The scaled head sits elsewhere in the photo, so its vertices sample other features.
+    assert_ne!(tracked.template.features, neutral.template.features);
+
+    // Posed with its own identity, the avatar's head is the tracked size.
+    let head_height = |model: &EhmModel| {
+        let mut posed = PosedBody::default();
+        model
+            .pose(&BodyPose::rest(model), &mut posed)
+            .expect("pose");
+        let ys = model
+            .head_vertices
+            .iter()
+            .map(|&v| posed.vertices[v as usize].y);
+        ys.clone().fold(f32::MIN, f32::max) - ys.fold(f32::MAX, f32::min)
+    };
+    let neutral_height = head_height(&model);
+    tracked.apply_ehm_identity(&mut model);
+    let ratio = head_height(&model) / neutral_height;
+    assert!((ratio - 1.3).abs() < 0.05, "head height ×{ratio}");
+
+    // Through the file, and refused when broken.
+    let file = dir.join("card.guava");
+    tracked.save(&file).expect("save");
+    assert_eq!(Avatar::load(&file).expect("load"), tracked);
+    let bytes = std::fs::read(&file).expect("read");
+    let header_end = bytes
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| **b == b'\n')
+        .nth(1)
+        .expect("header")
+        .0;
+    let header = String::from_utf8(bytes[..header_end].to_vec()).expect("utf8");
+    let broken = header.replacen("\"head_scale\":[1.4,", "\"head_scale\":[0.0,", 1);
+    assert_ne!(broken, header, "the header holds the head scale");
+    let mut broken = broken.into_bytes();
+    broken.extend_from_slice(&bytes[header_end..]);
+    let err = Avatar::from_bytes(&broken, "bad.guava").expect_err("zero scale");
+    assert!(err.to_string().contains("ehm_identity.head_scale"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{Avatar, AvatarKind, LocalGaussians, UvGaussians};
 use crate::gaussians::{MAX_CHANNELS, MIN_CHANNELS};
+use crate::tracking::EhmIdentityRecord;
 
 pub const AVATAR_FORMAT: &str = "guava-rs avatar 1";
 
@@ -33,6 +34,8 @@ struct Header {
     body_triangles: usize,
     channels: usize,
     identity: BTreeMap<String, f32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    ehm_identity: Option<EhmIdentityRecord>,
     source: String,
     template_gaussians: usize,
     uv_gaussians: usize,
@@ -47,6 +50,7 @@ impl Avatar {
             body_triangles: self.body_triangles,
             channels: self.channels,
             identity: self.identity.clone(),
+            ehm_identity: self.ehm_identity.clone(),
             source: self.source.clone(),
             template_gaussians: self.template.len(),
             uv_gaussians: self.uv.local.len(),
@@ -119,6 +123,7 @@ impl Avatar {
             body_triangles: header.body_triangles,
             channels: c,
             identity: header.identity,
+            ehm_identity: header.ehm_identity,
             source: header.source,
             template,
             uv: UvGaussians {
@@ -136,6 +141,10 @@ impl Avatar {
     pub fn validate(&self) -> Result<(), String> {
         if let Some((name, value)) = self.identity.iter().find(|(_, v)| !v.is_finite()) {
             return Err(format!("identity {name:?} is {value}"));
+        }
+        if let Some(ehm) = &self.ehm_identity {
+            ehm.check()
+                .map_err(|(field, p)| format!("ehm_identity.{field}: {p}"))?;
         }
         if let Some(i) = self
             .uv

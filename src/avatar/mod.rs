@@ -19,7 +19,8 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::body::{BodyPose, Posable};
+use crate::body::{BodyPose, EhmModel, Posable};
+use crate::tracking::EhmIdentityRecord;
 
 /// Which pipeline made an avatar; shown to the user, never conflated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -82,6 +83,9 @@ pub struct Avatar {
     pub channels: usize,
     /// The source's identity coefficients (shape) by parameter name; every pose uses them.
     pub identity: BTreeMap<String, f32>,
+    /// EHM's per-avatar skeleton (joint offsets, head and hand scale) the source was tracked
+    /// with: GUAVA-mode avatars carry it, and their body is posed with it.
+    pub ehm_identity: Option<EhmIdentityRecord>,
     /// Where it came from (the photo's file name), shown to the user.
     pub source: String,
     /// One per body vertex, in vertex order; rotations relative to the vertex's skinning rotation.
@@ -98,6 +102,11 @@ impl Avatar {
             return Err(format!(
                 "the avatar is bound to body {:?} ({} vertices, {} triangles), not {:?} ({} vertices, {} triangles)",
                 self.body, self.body_vertices, self.body_triangles, name, vertices, triangles
+            ));
+        }
+        if self.ehm_identity.is_some() && !body.uses_ehm_identity() {
+            return Err(format!(
+                "the avatar carries EHM's joint offsets and head and hand scales, which body {name:?} does not take"
             ));
         }
         match self
@@ -119,6 +128,15 @@ impl Avatar {
                 pose.coefficients[i] = value;
             }
         }
+    }
+
+    /// Builds `body` with the avatar's EHM identity (the neutral one when it carries none), as
+    /// every pose of the avatar needs.
+    pub fn apply_ehm_identity(&self, body: &mut EhmModel) {
+        body.identity = self
+            .ehm_identity
+            .as_ref()
+            .map_or_else(Default::default, EhmIdentityRecord::to_identity);
     }
 
     pub fn len(&self) -> usize {

@@ -22,7 +22,7 @@ use crate::camera::Camera;
 use crate::keypoints::Landmarkers;
 use crate::reconstruct::raster::rasterize;
 use crate::reconstruct::{ReconstructError, SourceImage, SourceView, Stage, StageClock, UvMap};
-use crate::tracking::Tracking;
+use crate::tracking::{EhmIdentityRecord, Tracking};
 
 /// UV Gaussians at or below this opacity are dropped (`cfg.opacity_threshold`).
 pub const PRUNE_OPACITY: f32 = 0.001;
@@ -57,8 +57,9 @@ pub fn uv_map(body: &EhmModel, size: u32) -> UvMap {
     }
 }
 
-/// Reconstructs `image` (already at the encoder's size, masked) seen from `view` on `body`.
-/// `uv` is [`uv_map`] at the models' UV size. Progress and cancellation as in
+/// Reconstructs `image` (already at the encoder's size, masked) seen from `view` on `body`, built
+/// with the source's identity (`body.identity`, which the avatar keeps). `uv` is [`uv_map`] at
+/// the models' UV size. Progress and cancellation as in
 /// [`crate::reconstruct::reconstruct_default`].
 pub fn reconstruct_guava(
     models: &mut GuavaModels,
@@ -191,6 +192,7 @@ pub fn reconstruct_guava(
         body_triangles: body.triangles.len(),
         channels: c,
         identity: identity(body, &view.pose.coefficients),
+        ehm_identity: Some(EhmIdentityRecord::of(&body.identity)),
         source: source_name.into(),
         template,
         uv: gaussians,
@@ -201,8 +203,8 @@ pub fn reconstruct_guava(
 
 /// Reads `photo` at the encoder's size, masks it (its alpha, else the pose model's person
 /// segmentation when `landmarkers` are given, else refused: GUAVA's encoder was trained on
-/// masked photos), takes frame 0 of `tracking` on `body` as the source view and runs
-/// [`reconstruct_guava`]. Every error names its file.
+/// masked photos), takes frame 0 of `tracking` on `body` (with the tracking's EHM identity) as the
+/// source view and runs [`reconstruct_guava`]. Every error names its file.
 pub fn reconstruct_guava_file(
     models: &mut GuavaModels,
     body: &EhmModel,
@@ -227,12 +229,25 @@ pub fn reconstruct_guava_file(
         image.apply_mask(pose.mask_at(image.size as usize));
     }
     let name = tracking.display().to_string();
-    let view = SourceView::from_tracking(&Tracking::load(tracking)?, body, &name)?;
+    let tracking = Tracking::load(tracking)?;
+    let view = SourceView::from_tracking(&tracking, body, &name)?;
     let source = photo.file_name().map_or_else(
         || photo.display().to_string(),
         |n| n.to_string_lossy().into_owned(),
     );
-    reconstruct_guava(models, body, uv, &view, &image, &source, progress)
+    // The tracker's skeleton (joint offsets, head and hand scale) belongs to this person: the
+    // body is built with it, so sampling sees the tracked body (a copy only when it differs).
+    let identity = tracking
+        .identity
+        .ehm
+        .as_ref()
+        .map_or_else(Default::default, EhmIdentityRecord::to_identity);
+    if identity == body.identity {
+        return reconstruct_guava(models, body, uv, &view, &image, &source, progress);
+    }
+    let mut tracked = body.clone();
+    tracked.identity = identity;
+    reconstruct_guava(models, &tracked, uv, &view, &image, &source, progress)
 }
 
 /// The source camera as GUAVA's sampling sees it.

@@ -129,6 +129,7 @@ pub fn build(
         body_triangles: body.triangles.len(),
         channels: c,
         identity,
+        ehm_identity: None,
         source,
         template,
         uv: out,

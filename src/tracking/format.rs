@@ -77,6 +77,49 @@ pub struct EhmIdentityRecord {
 }
 
 impl EhmIdentityRecord {
+    /// The record of an EHM body's identity.
+    pub fn of(identity: &crate::body::EhmIdentity) -> Self {
+        Self {
+            joints_offset: identity
+                .joints_offset
+                .iter()
+                .map(|o| o.to_array())
+                .collect(),
+            head_scale: identity.head_scale.to_array(),
+            hand_scale: identity.hand_scale.to_array(),
+        }
+    }
+
+    /// Checks what posing relies on: one offset per SMPL-X joint, finite offsets under a metre,
+    /// scales in (0, 10]. The error is (field, problem).
+    pub fn check(&self) -> Result<(), (String, String)> {
+        let joints = crate::body::SMPLX_JOINTS.len();
+        if self.joints_offset.len() != joints {
+            return Err((
+                "joints_offset".into(),
+                format!(
+                    "{} offsets, expected {joints} (one per SMPL-X joint)",
+                    self.joints_offset.len()
+                ),
+            ));
+        }
+        for (j, o) in self.joints_offset.iter().enumerate() {
+            check_vector(o, 1.0).map_err(|p| (format!("joints_offset[{j}]"), p))?;
+        }
+        for (field, s) in [
+            ("head_scale", self.head_scale),
+            ("hand_scale", self.hand_scale),
+        ] {
+            if let Some(x) = s
+                .iter()
+                .find(|x| !(x.is_finite() && **x > 0.0 && **x <= 10.0))
+            {
+                return Err((field.into(), format!("{x} is not in (0, 10]")));
+            }
+        }
+        Ok(())
+    }
+
     /// The identity an EHM body is built with (`EhmModel::identity`).
     pub fn to_identity(&self) -> crate::body::EhmIdentity {
         crate::body::EhmIdentity {
@@ -250,35 +293,8 @@ impl Tracking {
                 .map_err(|p| fail(None, format!("identity.parameters.{name}"), p))?;
         }
         if let Some(ehm) = &self.identity.ehm {
-            if ehm.joints_offset.len() != 55 {
-                return Err(fail(
-                    None,
-                    "identity.ehm.joints_offset".into(),
-                    format!(
-                        "{} offsets, expected 55 (one per SMPL-X joint)",
-                        ehm.joints_offset.len()
-                    ),
-                ));
-            }
-            for (j, o) in ehm.joints_offset.iter().enumerate() {
-                check_vector(o, 1.0)
-                    .map_err(|p| fail(None, format!("identity.ehm.joints_offset[{j}]"), p))?;
-            }
-            for (field, s) in [
-                ("head_scale", ehm.head_scale),
-                ("hand_scale", ehm.hand_scale),
-            ] {
-                if let Some(x) = s
-                    .iter()
-                    .find(|x| !(x.is_finite() && **x > 0.0 && **x <= 10.0))
-                {
-                    return Err(fail(
-                        None,
-                        format!("identity.ehm.{field}"),
-                        format!("{x} is not in (0, 10]"),
-                    ));
-                }
-            }
+            ehm.check()
+                .map_err(|(field, p)| fail(None, format!("identity.ehm.{field}"), p))?;
         }
         if self.frames.is_empty() {
             return Err(fail(None, "frames".into(), "no frames".into()));

@@ -18,11 +18,15 @@ const WEIGHT_SUM_TOLERANCE: f32 = 1e-3;
 
 impl EhmModel {
     pub fn load(path: &Path) -> Result<Self, NpzError> {
-        let npz = Npz::open(path)?;
+        Self::from_opened(&Npz::open(path)?, path)
+    }
+
+    /// From an `.npz` already opened from `path`; the model is named after the file's stem.
+    pub fn from_opened(npz: &Npz, path: &Path) -> Result<Self, NpzError> {
         let name = path
             .file_stem()
             .map_or_else(|| "EHM".into(), |s| s.to_string_lossy().into_owned());
-        Self::from_npz(&npz, name)
+        Self::from_npz(npz, name)
     }
 
     pub fn from_npz(npz: &Npz, name: String) -> Result<Self, NpzError> {
