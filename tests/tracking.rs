@@ -450,7 +450,7 @@ fn default_motion_onto_an_smplx_rig_reports_what_it_drops() {
     let report = &retarget.report;
     assert!(report.unmapped_joints.is_empty(), "{report:?}");
     assert_eq!(report.unmapped_parameters.len(), demo.parameters.len() - 1);
-    assert_eq!(report.approximations, ["eyeBlinkLeft → eyelid_left"]);
+    assert_eq!(report.approximations, ["eyeBlinkLeft as eyelid_left"]);
     assert!(report.rest_corrected);
     // At rest the default body's arms hang in its A-pose; on a T-pose rig that is a shoulder
     // rotation taking the T-pose arm onto the default body's rest arm.

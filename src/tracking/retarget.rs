@@ -47,7 +47,7 @@ pub struct RetargetReport {
     pub unmapped_identity: Vec<String>,
     /// The file has EHM identity (joint offsets, head and hand scale) that this model does not use.
     pub ehm_identity_ignored: bool,
-    /// Arm rotations were corrected for a different rest pose (T-pose ↔ A-pose).
+    /// Arm rotations were corrected for a different rest pose (T-pose and A-pose).
     pub rest_corrected: bool,
     /// Parameters carried onto a similar but not equivalent one (`from → to`).
     pub approximations: Vec<String>,
@@ -85,7 +85,7 @@ impl RetargetReport {
         }
         if self.rest_corrected {
             lines.push(
-                "arm rotations corrected for the rigs' different rest poses (T-pose ↔ A-pose); \
+                "arm rotations corrected for the rigs' different rest poses (T-pose and A-pose); \
                  the spine and hands are approximate"
                     .into(),
             );
@@ -255,7 +255,7 @@ impl Retarget {
             let similar = SIMILAR_PARAMETERS
                 .iter()
                 .find(|(from, _)| from == name)
-                .and_then(|&(from, to)| Some((model_parameter(to)?, format!("{from} → {to}"))));
+                .and_then(|&(from, to)| Some((model_parameter(to)?, format!("{from} as {to}"))));
             match (model_parameter(name), similar) {
                 (Some(m), _) => parameters.push((t, m)),
                 (None, Some((m, note))) => {
