@@ -2,16 +2,18 @@
 //! drag-and-drop, and the viewport. Loading runs on a worker thread with progress and Cancel.
 
 use crate::avatar_view::{AvatarState, FitAction, SourcePreview};
+use crate::body_model::ViewerBody;
 use crate::body_panel::BodyState;
 use crate::motion::Motion;
 use crate::orbit::OrbitCamera;
 use crate::viewport::{
     Content, DisplaySettings, SceneRef, ViewportCallback, ViewportReport, ViewportResources,
 };
-use guava::avatar::Avatar;
-use guava::body::BodyModel;
+use guava::avatar::{Avatar, AvatarKind};
+use guava::body::{BodyModel, EhmModel, Posable};
 use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
+use guava::guava_mode::GuavaModels;
 use guava::render::present::PresentMode;
 use guava::render::splatter::max_gaussians;
 use guava::tracking::import::{Imported, open_motion};
@@ -68,16 +70,25 @@ pub enum CameraMode {
 /// What a worker thread loaded.
 enum Loaded {
     Cloud(GaussianCloud),
-    Body(BodyModel),
+    Body(Box<ViewerBody>),
     Motion(Imported),
-    /// An avatar file, or a reconstruction (then with what it saw, and the photo with its
-    /// keypoints when the pose model ran).
+    /// GUAVA's exported networks (GUAVA mode).
+    Networks(Box<GuavaModels>),
+    /// An avatar file, or a reconstruction (then with a summary of what it saw, the photo with its
+    /// keypoints when the pose model ran, and the photo's camera).
     Avatar(
         Box<Avatar>,
-        Option<guava::reconstruct::Report>,
+        Option<String>,
         Option<Box<SourcePreview>>,
         Option<(glam::Mat4, f32)>,
     ),
+}
+
+/// GUAVA mode's networks, shared with reconstruction workers (a session runs one call at a time).
+struct Networks {
+    models: Arc<Mutex<GuavaModels>>,
+    /// The folder and where its weights came from, shown in the panel.
+    label: String,
 }
 
 struct Loading {
@@ -97,6 +108,8 @@ pub struct GuavaApp {
     avatar: Option<AvatarState>,
     /// The motion driving the body (the demo motion until another is opened).
     motion: Option<Motion>,
+    /// GUAVA's networks, once the user opened their folder (GUAVA mode with an EHM body).
+    networks: Option<Networks>,
     view: View,
     next_generation: u64,
     orbit: OrbitCamera,
@@ -138,6 +151,7 @@ impl GuavaApp {
             body: None,
             avatar: None,
             motion: None,
+            networks: None,
             view: View::Body,
             next_generation: 0,
             orbit: OrbitCamera::default(),
@@ -157,6 +171,7 @@ impl GuavaApp {
             frame_ms: 0.0,
         };
         app.load_default_body();
+        app.load_demo_motion();
         if options.test_scene {
             app.open_test_scene();
         }
@@ -166,12 +181,16 @@ impl GuavaApp {
         app
     }
 
-    /// Shows the embedded default body (Anny) with the demo motion on its timeline.
+    /// Shows the embedded default body (Anny).
     fn load_default_body(&mut self) {
         match BodyModel::default_body() {
-            Ok(model) => self.set_body(model, "default body template"),
-            Err(e) => return self.error(e.to_string()),
+            Ok(model) => self.set_body(ViewerBody::Template(model), "default body template"),
+            Err(e) => self.error(e.to_string()),
         }
+    }
+
+    /// Puts the demo motion on the timeline.
+    fn load_demo_motion(&mut self) {
         match guava::tracking::demo_motion() {
             Ok(tracking) => {
                 let imported = Imported {
@@ -227,14 +246,17 @@ impl GuavaApp {
         self.motion.as_mut()
     }
 
-    /// Replaces the posed body (a validated template) and shows it.
-    fn set_body(&mut self, model: BodyModel, source: &str) {
+    /// Replaces the posed body (a validated template or EHM) and shows it.
+    fn set_body(&mut self, model: ViewerBody, source: &str) {
         self.next_generation += 1;
+        let what = match &model {
+            ViewerBody::Template(_) => "body model, not a GUAVA avatar",
+            ViewerBody::Ehm(_) => "EHM, GUAVA mode's body (SMPL-X with a FLAME head)",
+        };
         let label = format!(
-            "{source}: {} ({} vertices, {} joints) — body model, not a GUAVA avatar",
-            model.name,
-            model.vertices.len(),
-            model.joints.len()
+            "{source}: {} ({}) — {what}",
+            model.name(),
+            model.size_label()
         );
         if let Some(motion) = &mut self.motion {
             motion.retarget_to(&model);
@@ -247,6 +269,72 @@ impl GuavaApp {
         self.body = Some(BodyState::new(model, label, self.next_generation));
         self.view = View::Body;
         self.reset_camera();
+    }
+
+    /// Takes GUAVA's networks (GUAVA mode reconstructs photos with them on an EHM body).
+    fn set_networks(&mut self, models: GuavaModels) {
+        let d = models.dims;
+        let label = format!(
+            "GUAVA networks: {} (weights: {}; {}² image, {} vertices, {}² UV map, {} channels)",
+            models.dir.display(),
+            models.source,
+            d.image,
+            d.vertices,
+            d.uv,
+            d.colors
+        );
+        self.status = Some((label.clone(), false));
+        self.networks = Some(Networks {
+            models: Arc::new(Mutex::new(models)),
+            label,
+        });
+    }
+
+    /// Which reconstruction a dropped photo gets, and the files GUAVA mode needs.
+    fn mode_ui(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Mode");
+        let ehm = self.body.as_ref().is_some_and(|b| b.model.is_ehm());
+        ui.label(match (ehm, &self.networks) {
+            (false, _) => {
+                "Default mode: photos become the default reconstruction on a body template (no \
+                 learned weights). GUAVA mode needs an EHM body and GUAVA's networks."
+            }
+            (true, None) => {
+                "GUAVA mode: EHM body open; open GUAVA's networks folder to reconstruct photos."
+            }
+            (true, Some(_)) => {
+                "GUAVA mode: photos with their tracking (.json beside them) are reconstructed by \
+                 GUAVA's networks on the EHM body."
+            }
+        });
+        if let Some(n) = &self.networks {
+            ui.label(&n.label);
+        }
+        let mut pick = None;
+        ui.horizontal(|ui| {
+            if ui
+                .button("EHM body…")
+                .on_hover_text("an EHM body converted by tools/convert_ehm.py (.npz)")
+                .clicked()
+            {
+                pick = rfd::FileDialog::new()
+                    .add_filter("EHM body", &["npz"])
+                    .pick_file();
+            }
+            if ui
+                .button("Networks folder…")
+                .on_hover_text("GUAVA's networks exported by tools/export_guava_onnx.py")
+                .clicked()
+            {
+                pick = rfd::FileDialog::new().pick_folder();
+            }
+            if ehm && ui.button("Default body").clicked() {
+                self.load_default_body();
+            }
+        });
+        if let Some(path) = pick {
+            self.open(path);
+        }
     }
 
     pub fn view(&self) -> View {
@@ -345,7 +433,8 @@ impl GuavaApp {
         );
     }
 
-    /// Starts loading a file on a worker thread; the current scene stays until it succeeds.
+    /// Starts loading a file (or GUAVA's networks folder) on a worker thread; the current scene
+    /// stays until it succeeds.
     pub fn open(&mut self, path: PathBuf) {
         let ext = path
             .extension()
@@ -354,15 +443,20 @@ impl GuavaApp {
         enum Kind {
             Cloud,
             Body,
+            /// An EHM body (GUAVA mode) or an SMPL-X motion: told apart by the file's contents.
+            Npz,
+            Networks,
             Motion,
             Avatar,
-            Photo(Option<PathBuf>, Arc<BodyModel>),
+            Photo(Option<PathBuf>, Arc<ViewerBody>),
         }
         use guava::reconstruct::Tracked;
         let kind = match ext.as_deref() {
+            _ if path.is_dir() => Kind::Networks,
             Some("ply") => Kind::Cloud,
             Some("glb") => Kind::Body,
-            Some("json" | "csv" | "npz") => Kind::Motion,
+            Some("npz") => Kind::Npz,
+            Some("json" | "csv") => Kind::Motion,
             Some("guava") => Kind::Avatar,
             Some("png" | "jpg" | "jpeg") => {
                 // Its tracking file beside it, if there is one; otherwise the pose is fitted.
@@ -374,14 +468,15 @@ impl GuavaApp {
             }
             _ => {
                 self.error(format!(
-                    "{}: unsupported file type (open a 3DGS .ply, a body template .glb, an avatar \
-                     .guava, a photo .png/.jpg with its tracking .json, or a motion: tracking .json, \
-                     ARKit .csv, SMPL-X .npz)",
+                    "{}: unsupported file type (open a 3DGS .ply, a body template .glb, an EHM \
+                     body .npz, GUAVA's networks folder, an avatar .guava, a photo .png/.jpg with \
+                     its tracking .json, or a motion: tracking .json, ARKit .csv, SMPL-X .npz)",
                     path.display()
                 ));
                 return;
             }
         };
+        let networks = self.networks.as_ref().map(|n| n.models.clone());
         let worker_path = path.clone();
         self.spawn_job(
             path,
@@ -390,16 +485,43 @@ impl GuavaApp {
                 Kind::Avatar => Avatar::load(&worker_path)
                     .map(|a| Loaded::Avatar(Box::new(a), None, None, None))
                     .map_err(|e| e.to_string()),
-                Kind::Photo(tracking, body) => reconstruct_worker(
-                    &body,
-                    &worker_path,
-                    tracking.as_deref().map_or(Tracked::Fit, Tracked::File),
-                    worker_stage,
-                    worker_cancel,
-                ),
+                Kind::Photo(tracking, body) => match (&*body, tracking) {
+                    (ViewerBody::Template(body), tracking) => reconstruct_worker(
+                        body,
+                        &worker_path,
+                        tracking.as_deref().map_or(Tracked::Fit, Tracked::File),
+                        worker_stage,
+                        worker_cancel,
+                    ),
+                    (ViewerBody::Ehm(body), Some(tracking)) => guava_worker(
+                        body,
+                        networks.as_deref(),
+                        &worker_path,
+                        &tracking,
+                        worker_stage,
+                        worker_cancel,
+                    ),
+                    (ViewerBody::Ehm(_), None) => Err(format!(
+                        "{}: GUAVA mode needs the photo's tracking on the EHM body beside it ({}); \
+                         single-image fitting fits the default body only",
+                        worker_path.display(),
+                        file_name(&guava::reconstruct::tracking_beside(&worker_path))
+                    )),
+                },
                 Kind::Body => BodyModel::load(&worker_path)
-                    .map(Loaded::Body)
+                    .map(|m| Loaded::Body(Box::new(ViewerBody::Template(m))))
                     .map_err(|e| e.to_string()),
+                Kind::Npz => open_npz(&worker_path),
+                Kind::Networks => {
+                    *worker_stage.lock().unwrap_or_else(|e| e.into_inner()) =
+                        "loading GUAVA's networks";
+                    guava::onnx::OnnxRuntime::load()
+                        .map_err(|e| e.to_string())
+                        .and_then(|rt| {
+                            GuavaModels::load_dir(rt, &worker_path).map_err(|e| e.to_string())
+                        })
+                        .map(|m| Loaded::Networks(Box::new(m)))
+                }
                 Kind::Cloud => guava::gaussians::ply::read(&worker_path)
                     .map(Loaded::Cloud)
                     .map_err(|e| e.to_string()),
@@ -437,10 +559,9 @@ impl GuavaApp {
 
     /// Reconstructs the avatar's source photo again with `view` (the fit adjusted by hand).
     pub fn reconstruct_with_pose(&mut self, photo: PathBuf, view: guava::reconstruct::SourceView) {
-        let Some(body) = &self.body else {
-            return self.error("no body to reconstruct on".into());
+        let Some(model) = self.template_body() else {
+            return;
         };
-        let model = body.model.clone();
         let worker_photo = photo.clone();
         self.spawn_job(photo, "reading", move |stage, cancel| {
             let given = guava::reconstruct::Tracked::Given(view);
@@ -448,14 +569,33 @@ impl GuavaApp {
         });
     }
 
+    /// The current body when it is a template (what the default reconstruction and the fit work
+    /// on); otherwise says so and gives `None`.
+    fn template_body(&mut self) -> Option<Arc<BodyModel>> {
+        match self.body.as_ref().map(|b| &*b.model) {
+            Some(ViewerBody::Template(m)) => Some(Arc::new(m.clone())),
+            Some(ViewerBody::Ehm(_)) => {
+                self.error(
+                    "the default reconstruction works on a body template; the current body is \
+                     EHM (GUAVA mode): Mode > Default body first"
+                        .into(),
+                );
+                None
+            }
+            None => {
+                self.error("no body to reconstruct on".into());
+                None
+            }
+        }
+    }
+
     /// Reconstructs a synthetic photo of the current body (the known-answer demo: the body with a
     /// colour pattern, drawn from GUAVA's camera), so a fresh install can make an avatar offline.
     pub fn reconstruct_synthetic_photo(&mut self) {
         use guava::reconstruct::{SourceView, synthetic};
-        let Some(body) = &self.body else {
-            return self.error("no body to reconstruct on".into());
+        let Some(model) = self.template_body() else {
+            return;
         };
-        let model = body.model.clone();
         let view = SourceView {
             pose: guava::body::BodyPose::rest(model.as_ref()),
             camera: synthetic::upper_body_camera(&model, 0.35),
@@ -484,19 +624,20 @@ impl GuavaApp {
                 )
                 .map(|(a, r)| {
                     let camera = (view.camera.view_from_world, view.camera.invtanfov());
-                    Loaded::Avatar(Box::new(a), Some(r), None, Some(camera))
+                    Loaded::Avatar(Box::new(a), Some(default_summary(&r)), None, Some(camera))
                 })
                 .map_err(|e| e.to_string())
             },
         );
     }
 
-    /// Shows an avatar if it fits the current body; otherwise keeps what is shown.
+    /// Shows an avatar if it fits the current body (then built with the avatar's identity);
+    /// otherwise keeps what is shown.
     fn accept_avatar(
         &mut self,
         path: &Path,
         avatar: Avatar,
-        report: Option<guava::reconstruct::Report>,
+        summary: Option<String>,
         preview: Option<SourcePreview>,
         source_camera: Option<(glam::Mat4, f32)>,
     ) {
@@ -506,28 +647,11 @@ impl GuavaApp {
         if let Err(e) = avatar.check_body(&*body.model) {
             return self.error(format!("{}: {e}; the current view is kept", path.display()));
         }
-        avatar.apply_identity(&*body.model, &mut body.pose);
+        body.take_identity(&avatar);
         let mut label = format!("{} — {}", avatar.kind.label(), avatar.source);
-        if let Some(r) = &report {
-            let ms: f64 = r.timings.iter().map(|(_, d)| d.as_secs_f64() * 1e3).sum();
-            if let Some(f) = &r.fit {
-                label.push_str(&format!(
-                    "; pose and camera fitted to {} keypoints ({:.1} px RMS)",
-                    f.keypoints_used, f.rms_px
-                ));
-                match (&f.face, &f.face_skipped) {
-                    (Some(face), _) => label.push_str(&format!(
-                        ", expression to {} face points ({:.1} px RMS)",
-                        face.points_used, face.rms_px
-                    )),
-                    (None, Some(why)) => label.push_str(&format!(", face not fitted ({why})")),
-                    (None, None) => {}
-                }
-            }
-            label.push_str(&format!(
-                "; {} of {} texels seen, {} mirrored, rest inpainted; {ms:.0} ms",
-                r.observed, r.texels, r.mirrored
-            ));
+        if let Some(summary) = summary {
+            label.push_str("; ");
+            label.push_str(&summary);
         }
         self.status = Some((
             format!(
@@ -584,8 +708,12 @@ impl GuavaApp {
             FitAction::SaveTracking => {
                 let photo = source.photo.clone();
                 let name = file_name(&photo);
+                // A fit preview exists only for avatars of a body template.
+                let Some(template) = body.model.template() else {
+                    return;
+                };
                 let tracking = view.to_tracking(
-                    &body.model,
+                    template,
                     &format!("fitted in guava-viewer to {name}, adjusted by hand; default body"),
                 );
                 let Some(path) = rfd::FileDialog::new()
@@ -646,13 +774,14 @@ impl GuavaApp {
                 self.loading = None;
                 match result {
                     Ok(Loaded::Cloud(cloud)) => self.accept_loaded(&path, cloud),
-                    Ok(Loaded::Body(model)) => self.set_body(model, &path.display().to_string()),
+                    Ok(Loaded::Body(model)) => self.set_body(*model, &path.display().to_string()),
+                    Ok(Loaded::Networks(models)) => self.set_networks(*models),
                     Ok(Loaded::Motion(imported)) => {
                         let label = format!("{} — {}", file_name(&path), imported.tracking.source);
                         self.set_motion(label, imported);
                     }
-                    Ok(Loaded::Avatar(avatar, report, preview, camera)) => {
-                        self.accept_avatar(&path, *avatar, report, preview.map(|p| *p), camera)
+                    Ok(Loaded::Avatar(avatar, summary, preview, camera)) => {
+                        self.accept_avatar(&path, *avatar, summary, preview.map(|p| *p), camera)
                     }
                     Err(e) => self.error(e),
                 }
@@ -706,6 +835,12 @@ impl GuavaApp {
                         .pick_file()
                     {
                         self.open(path);
+                    }
+                    ui.close();
+                }
+                if ui.button("Open GUAVA networks folder…").clicked() {
+                    if let Some(dir) = rfd::FileDialog::new().pick_folder() {
+                        self.open(dir);
                     }
                     ui.close();
                 }
@@ -782,11 +917,15 @@ impl GuavaApp {
             ui.label(&avatar.label);
             let a = &avatar.avatar;
             ui.label(format!(
-                "{} Gaussians: {} template + {} UV · {} channels (RGB, source confidence)",
+                "{} Gaussians: {} template + {} UV · {} channels ({})",
                 a.len(),
                 a.template.len(),
                 a.uv.local.len(),
-                a.channels
+                a.channels,
+                match a.kind {
+                    AvatarKind::DefaultReconstruction => "RGB, source confidence",
+                    AvatarKind::Guava => "RGB, then GUAVA's latent features for its refiner",
+                }
             ));
             let mut action = None;
             if let (Some(source), Some(body)) = (&mut avatar.source, &mut self.body) {
@@ -800,6 +939,8 @@ impl GuavaApp {
             }
         }
         if matches!(self.view, View::Body | View::Avatar) {
+            self.mode_ui(ui);
+            ui.separator();
             ui.heading("Body");
             match &mut self.body {
                 Some(body) => body.ui(ui),
@@ -1156,10 +1297,101 @@ fn reconstruct_worker(
     let preview = SourcePreview::new(body, photo, &report, view).map(Box::new);
     Ok(Loaded::Avatar(
         Box::new(avatar),
-        Some(report),
+        Some(default_summary(&report)),
         preview,
         Some(camera),
     ))
+}
+
+/// What a default reconstruction saw and how long it took, for the avatar's label.
+fn default_summary(r: &guava::reconstruct::Report) -> String {
+    let ms: f64 = r.timings.iter().map(|(_, d)| d.as_secs_f64() * 1e3).sum();
+    let mut summary = String::new();
+    if let Some(f) = &r.fit {
+        summary.push_str(&format!(
+            "pose and camera fitted to {} keypoints ({:.1} px RMS)",
+            f.keypoints_used, f.rms_px
+        ));
+        match (&f.face, &f.face_skipped) {
+            (Some(face), _) => summary.push_str(&format!(
+                ", expression to {} face points ({:.1} px RMS)",
+                face.points_used, face.rms_px
+            )),
+            (None, Some(why)) => summary.push_str(&format!(", face not fitted ({why})")),
+            (None, None) => {}
+        }
+        summary.push_str("; ");
+    }
+    summary.push_str(&format!(
+        "{} of {} texels seen, {} mirrored, rest inpainted; {ms:.0} ms",
+        r.observed, r.texels, r.mirrored
+    ));
+    summary
+}
+
+/// GUAVA mode: the photo with its tracking on the EHM body through GUAVA's networks.
+fn guava_worker(
+    body: &EhmModel,
+    networks: Option<&Mutex<GuavaModels>>,
+    photo: &Path,
+    tracking: &Path,
+    stage: &Mutex<&'static str>,
+    cancel: &AtomicBool,
+) -> Result<Loaded, String> {
+    use guava::guava_mode::{reconstruct_guava_file, uv_map};
+    let networks = networks.ok_or_else(|| {
+        format!(
+            "{}: GUAVA mode needs GUAVA's networks: open their folder (Mode > Networks folder…, \
+             written by tools/export_guava_onnx.py)",
+            photo.display()
+        )
+    })?;
+    let name = tracking.display().to_string();
+    let tracked = guava::tracking::Tracking::load(tracking).map_err(|e| e.to_string())?;
+    let camera = guava::tracking::camera_at(&tracked, 0.0)
+        .ok_or_else(|| format!("{name}: frame 0: camera: missing (reconstruction needs it)"))?;
+    *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the pose model";
+    // Only for a person mask when the photo has no alpha.
+    let mut landmarkers = guava::onnx::OnnxRuntime::load()
+        .ok()
+        .and_then(|rt| guava::keypoints::Landmarkers::load(rt).ok());
+    let mut models = networks.lock().unwrap_or_else(|e| e.into_inner());
+    let uv = uv_map(body, models.dims.uv as u32);
+    let (avatar, r) = reconstruct_guava_file(
+        &mut models,
+        body,
+        &uv,
+        photo,
+        tracking,
+        landmarkers.as_mut(),
+        &mut progress(stage, cancel),
+    )
+    .map_err(|e| e.to_string())?;
+    let ms: f64 = r.timings.iter().map(|(_, d)| d.as_secs_f64() * 1e3).sum();
+    let summary = format!(
+        "networks: {}; {} of {} texels on faces the photo shows, {} Gaussians pruned; {ms:.0} ms",
+        models.source, r.observed_texels, r.texels, r.pruned
+    );
+    Ok(Loaded::Avatar(
+        Box::new(avatar),
+        Some(summary),
+        None,
+        Some(camera),
+    ))
+}
+
+/// An `.npz` file: an EHM body (its `format` entry says so) or an SMPL-X motion.
+fn open_npz(path: &Path) -> Result<Loaded, String> {
+    let npz = guava::npz::Npz::open(path).map_err(|e| e.to_string())?;
+    if npz.contains("format") {
+        EhmModel::from_opened(&npz, path)
+            .map(|m| Loaded::Body(Box::new(ViewerBody::Ehm(m))))
+            .map_err(|e| e.to_string())
+    } else {
+        guava::tracking::import::smplx_from_npz(&npz)
+            .map(Loaded::Motion)
+            .map_err(|e| e.to_string())
+    }
 }
 
 fn file_name(path: &Path) -> String {

@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use glam::Vec2;
 use guava::avatar::{Avatar, Rig};
-use guava::body::{BodyModel, PosedBody};
+use guava::body::{BodyModel, Posable, PosedBody};
 use guava::fit::BodyPoint;
 use guava::gaussians::GaussianCloud;
 use guava::reconstruct::{Report, SourceImage, SourceView};
@@ -57,7 +57,7 @@ impl AvatarState {
                 .unwrap_or_else(|| GaussianCloud::new(self.avatar.channels));
             if let Err(e) = self
                 .rig
-                .animate(&self.avatar, posed, &model.triangles, &mut cloud)
+                .animate(&self.avatar, posed, model.triangles(), &mut cloud)
             {
                 log::error!("{e}");
                 return None;
@@ -183,11 +183,11 @@ impl SourcePreview {
     /// The photo with the points and the fit's controls; while editing, the red points follow
     /// `body`'s pose.
     pub fn ui(&mut self, ui: &mut egui::Ui, body: &mut BodyState) -> Option<FitAction> {
-        if self.editing {
-            let model = body.model.clone();
+        let model = body.model.clone();
+        if let (true, Some(template)) = (self.editing, model.template()) {
             let (posed, generation) = body.posed();
             if self.fitted_for != Some(generation) {
-                self.fitted = self.project_all(&model, posed);
+                self.fitted = self.project_all(template, posed);
                 self.fitted_for = Some(generation);
             }
         }
@@ -269,8 +269,10 @@ impl SourcePreview {
         if !editing {
             // Back to the pose the avatar was made with.
             let mut posed = PosedBody::default();
-            if body.model.pose(&self.view.pose, &mut posed).is_ok() {
-                self.fitted = self.project_all(&body.model, &posed);
+            if let Some(template) = body.model.template()
+                && template.pose(&self.view.pose, &mut posed).is_ok()
+            {
+                self.fitted = self.project_all(template, &posed);
             }
         }
         self.editing = editing;

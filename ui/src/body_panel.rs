@@ -4,16 +4,18 @@
 use std::sync::Arc;
 
 use glam::Vec3;
-use guava::body::{BodyModel, BodyPose, PosedBody, TargetGroup, vertex_normals};
+use guava::avatar::Avatar;
+use guava::body::{BodyPose, Posable, PosedBody, vertex_normals};
 use guava::render::mesh::MeshStyle;
 
+use crate::body_model::{SliderGroup, ViewerBody};
 use crate::viewport::BodyFrame;
 
 /// Posed positions and normals, shared with the viewport callback without copying.
 type PosedMesh = (Arc<Vec<Vec3>>, Arc<Vec<Vec3>>);
 
 pub struct BodyState {
-    pub model: Arc<BodyModel>,
+    pub model: Arc<ViewerBody>,
     /// Where the model came from, shown in the panel.
     pub label: String,
     pub pose: BodyPose,
@@ -22,6 +24,8 @@ pub struct BodyState {
     selected_joint: usize,
     topology: u64,
     triangles: Arc<Vec<[u32; 3]>>,
+    weld: Vec<u32>,
+    sliders: Vec<SliderGroup>,
     posed: PosedBody,
     posed_for: Option<BodyPose>,
     pose_generation: u64,
@@ -30,11 +34,13 @@ pub struct BodyState {
 }
 
 impl BodyState {
-    pub fn new(model: BodyModel, label: String, topology: u64) -> Self {
+    pub fn new(model: ViewerBody, label: String, topology: u64) -> Self {
         let pose = BodyPose::rest(&model);
-        let selected_joint = model.joint_index("head").unwrap_or(0);
+        let selected_joint = model.joint_names().position(|n| n == "head").unwrap_or(0);
         Self {
-            triangles: Arc::new(model.triangles.clone()),
+            triangles: Arc::new(model.triangles().to_vec()),
+            weld: model.weld(),
+            sliders: model.slider_groups(),
             model: Arc::new(model),
             label,
             pose,
@@ -47,6 +53,18 @@ impl BodyState {
             pose_generation: 0,
             normals_scratch: Vec::new(),
             frame: None,
+        }
+    }
+
+    /// Builds the body with `avatar`'s identity: its shape coefficients on the pose and, on an
+    /// EHM body, its joint offsets and head and hand scales on the model.
+    pub fn take_identity(&mut self, avatar: &Avatar) {
+        avatar.apply_identity(&*self.model, &mut self.pose);
+        if self.model.is_ehm()
+            && let Some(ehm) = Arc::make_mut(&mut self.model).ehm_mut()
+        {
+            avatar.apply_ehm_identity(ehm);
+            self.posed_for = None;
         }
     }
 
@@ -72,8 +90,8 @@ impl BodyState {
         let mut normals = Vec::new();
         vertex_normals(
             &self.posed.vertices,
-            &self.model.triangles,
-            &self.model.weld,
+            &self.triangles,
+            &self.weld,
             &mut self.normals_scratch,
             &mut normals,
         );
@@ -119,12 +137,13 @@ impl BodyState {
         let model = self.model.clone();
         ui.add(egui::Slider::new(&mut self.pose.translation.y, -2.0..=2.0).text("lift (m)"));
         ui.label("Joint rotation (axis-angle, degrees)");
+        let joint_name = |j: usize| model.joint_names().nth(j).unwrap_or_default();
         egui::ComboBox::new("joint", "joint")
-            .selected_text(&model.joints[self.selected_joint].name)
+            .selected_text(joint_name(self.selected_joint))
             .height(300.0)
             .show_ui(ui, |ui| {
-                for (j, joint) in model.joints.iter().enumerate() {
-                    ui.selectable_value(&mut self.selected_joint, j, &joint.name);
+                for (j, name) in model.joint_names().enumerate() {
+                    ui.selectable_value(&mut self.selected_joint, j, name);
                 }
             });
         let r = &mut self.pose.rotations[self.selected_joint];
@@ -137,18 +156,15 @@ impl BodyState {
                 *value = deg.to_radians();
             }
         }
-        for (title, group) in [
-            ("Expression (ARKit face units)", TargetGroup::Expression),
-            ("Shape (phenotype ends)", TargetGroup::Shape),
-        ] {
-            egui::CollapsingHeader::new(title)
-                .default_open(group == TargetGroup::Expression)
+        for group in &self.sliders {
+            egui::CollapsingHeader::new(group.title)
+                .default_open(group.open)
                 .show(ui, |ui| {
-                    for (i, target) in model.targets_in(group) {
-                        let [lo, hi] = target.range;
+                    for s in &group.sliders {
+                        let [lo, hi] = s.range;
                         ui.add(
-                            egui::Slider::new(&mut self.pose.coefficients[i], lo..=hi)
-                                .text(&target.name),
+                            egui::Slider::new(&mut self.pose.coefficients[s.index], lo..=hi)
+                                .text(&s.name),
                         );
                     }
                 });

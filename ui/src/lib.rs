@@ -3,6 +3,7 @@
 
 pub mod app;
 pub mod avatar_view;
+pub mod body_model;
 pub mod body_panel;
 pub mod motion;
 pub mod orbit;

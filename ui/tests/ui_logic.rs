@@ -381,7 +381,9 @@ fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
     assert_eq!(h.state().camera_mode(), CameraMode::Source);
     let body_state = h.state_mut().body_mut().expect("body");
     let model = body_state.model.clone();
-    let head = model.joint_index("head").expect("head");
+    let head = guava::body::Posable::joint_names(model.as_ref())
+        .position(|n| n == "head")
+        .expect("head");
     let fitted_head = body_state.pose.rotations[head];
     body_state.pose.rotations[head].y += 0.4;
     frame(&mut h);
@@ -401,5 +403,127 @@ fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
         !h.state().editing_fit(),
         "a new reconstruction starts with no edit under way"
     );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// GUAVA mode in the viewer: the EHM body and GUAVA's networks (the reduced, randomly initialised
+/// test export) open by file and by folder; a photo with its tracking becomes a GUAVA avatar on
+/// the EHM body, built with the tracked skeleton, and a pose change re-splats it. What is missing
+/// is a clear error that keeps the current state.
+#[test]
+fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
+    use guava::tracking::{BodyKind, EhmIdentityRecord, Frame, TrackedCamera, Tracking};
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data");
+    let dir = std::env::temp_dir().join(format!("guava-ui-guava-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    // A card with alpha where a person would stand, and its tracking on the EHM body with a
+    // skeleton of its own (head 1.3× as tall).
+    let photo = dir.join("card.png");
+    image::RgbaImage::from_fn(128, 128, |x, y| {
+        let inside = (x as i32 - 64).abs() < 40;
+        image::Rgba([
+            (2 * x) as u8,
+            (2 * y) as u8,
+            128,
+            if inside { 255 } else { 0 },
+        ])
+    })
+    .save(&photo)
+    .expect("photo");
+    let joints = guava::body::SMPLX_JOINTS.map(String::from).to_vec();
+    let mut tracking = Tracking::new(BodyKind::Smplx, 30.0, joints.clone(), Vec::new());
+    let mut identity = EhmIdentityRecord::of(&Default::default());
+    identity.head_scale = [1.2, 1.3, 1.2];
+    tracking.identity.ehm = Some(identity.clone());
+    tracking.frames.push(Frame {
+        translation: [0.0; 3],
+        rotations: vec![[0.0; 3]; joints.len()],
+        values: Vec::new(),
+        camera: Some(TrackedCamera {
+            w2c: [
+                [1.0, 0.0, 0.0, 0.0],
+                [0.0, -1.0, 0.0, 0.2],
+                [0.0, 0.0, -1.0, 22.0],
+            ],
+            invtanfov: 24.0,
+        }),
+    });
+    tracking.save(&dir.join("card.json")).expect("tracking");
+
+    let mut h = harness(Options::default());
+    h.run();
+    h.state_mut().open(data.join("ehm_synthetic.npz"));
+    wait_until(&mut h, |app| {
+        app.body_label()
+            .is_some_and(|l| l.contains("ehm_synthetic"))
+    });
+    let label = h.state().body_label().unwrap_or_default().to_string();
+    assert!(label.contains("EHM, GUAVA mode's body"), "{label}");
+    h.run();
+    assert!(
+        h.query_all_by_label("eyelid_left").count() >= 1,
+        "EHM's sliders are shown"
+    );
+
+    // Without the networks: a clear error, no avatar.
+    h.state_mut().open(photo.clone());
+    let status = wait_for_status(&mut h, "networks");
+    assert!(
+        status.contains("card.png") && status.contains("GUAVA's networks"),
+        "{status}"
+    );
+    assert!(h.state().avatar_info().is_none());
+
+    h.state_mut().open(data.join("guava_onnx"));
+    let status = wait_for_status(&mut h, "GUAVA networks:");
+    assert!(status.contains("weights: random"), "{status}");
+    h.state_mut().open(photo.clone());
+    wait_until(&mut h, |app| app.avatar_info().is_some());
+    let (label, count) = h.state().avatar_info().expect("reconstructed");
+    assert!(
+        label.starts_with("GUAVA reconstruction — card.png; networks: random"),
+        "{label}"
+    );
+    assert_eq!(h.state().view(), View::Avatar);
+    // The body is built with the tracked skeleton.
+    let body = h.state_mut().body_mut().expect("body");
+    let ehm = match &*body.model {
+        guava_ui::body_model::ViewerBody::Ehm(m) => m,
+        _ => panic!("the body is EHM"),
+    };
+    assert_eq!(EhmIdentityRecord::of(&ehm.identity), identity);
+
+    // It goes through the splatting pass, and a pose change re-rigs and re-splats it once.
+    let start = Instant::now();
+    while h.state().report().stats.is_none() && start.elapsed() < Duration::from_secs(120) {
+        frame(&mut h);
+    }
+    let stats = h.state().report().stats.expect("splat stats reach the HUD");
+    assert_eq!(stats.input as usize, count);
+    assert!(stats.visible > 0, "{stats:?}");
+    frame(&mut h);
+    let before = h.state().report().renders;
+    let body = h.state_mut().body_mut().expect("body");
+    let model = body.model.clone();
+    body.pose
+        .set_rotation(model.as_ref(), "left_elbow", glam::Vec3::new(0.0, 0.0, 1.0))
+        .expect("joint");
+    frame(&mut h);
+    assert_eq!(
+        h.state().report().renders,
+        before + 1,
+        "a pose change splats once"
+    );
+
+    // A photo without its tracking: named, and the avatar stays.
+    let lone = dir.join("lone.png");
+    std::fs::copy(&photo, &lone).expect("copy");
+    h.state_mut().open(lone);
+    let status = wait_for_status(&mut h, "lone.png");
+    assert!(
+        status.contains("lone.json") && status.contains("tracking"),
+        "{status}"
+    );
+    assert_eq!(h.state().avatar_info().map(|(_, n)| n), Some(count));
     std::fs::remove_dir_all(&dir).ok();
 }
