@@ -4,6 +4,8 @@
 pub struct Solution {
     pub params: Vec<f64>,
     pub iterations: usize,
+    /// Σ r² at `params`.
+    pub cost: f64,
 }
 
 /// Minimises Σ r(p)² from `p`; `steps` are the finite-difference steps per parameter.
@@ -62,6 +64,7 @@ pub fn minimise(
     Solution {
         params: p,
         iterations,
+        cost,
     }
 }
 

@@ -102,6 +102,8 @@ const FINGER_PRIOR_PER_PALM: f64 = 0.1;
 /// The face mesh's ~100 points are not independent observations: each counts at this weight.
 const FACE_POINT_WEIGHT: f64 = 0.5;
 const ITERATIONS: usize = 30;
+/// Starting depths of the body stage, as factors of the shoulder-width estimate.
+const BODY_START_DEPTHS: [f32; 3] = [0.85, 1.0, 1.2];
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum FitError {
@@ -288,7 +290,8 @@ impl Stage<'_> {
         );
     }
 
-    fn solve(&mut self, camera_step: f64) -> (State, usize) {
+    /// Minimises from `self.base`; returns the state, the iterations taken and the final cost.
+    fn solve(&mut self, camera_step: f64) -> (State, usize, f64) {
         let p0: Vec<f64> = self
             .unknowns
             .iter()
@@ -304,7 +307,11 @@ impl Stage<'_> {
             })
             .collect();
         let solution = lm::minimise(p0, &steps, ITERATIONS, |p, r| self.residuals(p, r));
-        (self.state(&solution.params), solution.iterations)
+        (
+            self.state(&solution.params),
+            solution.iterations,
+            solution.cost,
+        )
     }
 
     /// Where `state` puts the observed points of `range`, in pixels (face points with their
@@ -424,7 +431,7 @@ pub fn fit_keypoints(
     let focal = GUAVA_INVTANFOV * side as f32 / 2.0;
     let depth = focal * w3 / w2.max(1.0);
     let centre = side as f32 / 2.0;
-    let start = State {
+    let start_at = |depth: f32| State {
         feature_offsets: [Vec2::ZERO; FACE_FEATURES.len()],
         pose: BodyPose::rest(body),
         camera: Vec3::new(
@@ -471,11 +478,24 @@ pub fn fit_keypoints(
         antagonists: Vec::new(),
         features: vec![None; body_observed],
         pixels: Vec::new(),
-        base: start,
+        base: start_at(depth),
         points: Vec::new(),
         joints: Vec::new(),
     };
-    let (mut result, mut iterations) = stage.solve(camera_step);
+    // The body stage has several minima (a broad suit's shoulders fit a short, large-headed body
+    // too), and which one a single start reaches changes with the last bits of the keypoints or
+    // of the maths library: start from several depths around the shoulder-width estimate and
+    // keep the best.
+    let (mut best, mut iterations) = ((stage.base.clone(), f64::INFINITY), 0);
+    for factor in BODY_START_DEPTHS {
+        stage.base = start_at(factor * depth);
+        let (state, used, cost) = stage.solve(camera_step);
+        iterations += used;
+        if cost < best.1 {
+            best = (state, cost);
+        }
+    }
+    let mut result = best.0;
 
     let mut face_report = None;
     if let Some((landmarks, embedding)) = face {
@@ -530,7 +550,7 @@ pub fn fit_keypoints(
         stage.base = result.clone();
         let face_range = body_observed..stage.observations.len();
         let rms_before_px = stage.rms(&result, face_range.clone());
-        let (with_face, face_iterations) = stage.solve(camera_step);
+        let (with_face, face_iterations, _) = stage.solve(camera_step);
         iterations += face_iterations;
         face_report = Some(FaceFitReport {
             points_used: face_range.len(),
@@ -582,7 +602,7 @@ pub fn fit_keypoints(
         stage.base = result.clone();
         let range = start..stage.observations.len();
         let rms_before_px = stage.rms(&result, range.clone());
-        let (with_hands, hand_iterations) = stage.solve(camera_step);
+        let (with_hands, hand_iterations, _) = stage.solve(camera_step);
         iterations += hand_iterations;
         hands_report = Some(HandFitReport {
             hands: input.hands.len(),
