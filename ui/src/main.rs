@@ -8,9 +8,10 @@ use std::sync::Arc;
 #[derive(Parser)]
 #[command(name = "guava-viewer", version, about = "GUAVA avatar viewer")]
 struct Args {
-    /// A file to open: 3DGS .ply, body template .glb, avatar .guava, a photo (.png/.jpg, with its
-    /// tracking .json beside it) to reconstruct, or a motion (.json, ARKit .csv, SMPL-X .npz).
-    file: Option<PathBuf>,
+    /// Files to open, in order: 3DGS .ply, body template .glb, avatar .guava, a photo (.png/.jpg,
+    /// with its tracking .json beside it) to reconstruct, a motion (.json, ARKit .csv, SMPL-X
+    /// .npz), or for GUAVA mode an EHM body .npz and GUAVA's networks folder.
+    files: Vec<PathBuf>,
     /// Start with the synthetic test scene.
     #[arg(long)]
     test_scene: bool,
@@ -36,7 +37,7 @@ fn main() {
         std::process::exit(2);
     }
     let options = Options {
-        open: args.file,
+        open: args.files,
         test_scene: args.test_scene,
         screenshot: args.screenshot,
         exit_after_secs: args.exit_after_secs,
