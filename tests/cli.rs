@@ -186,32 +186,13 @@ fn fit_writes_tracking_and_takes_a_model_folder() {
 
 #[test]
 fn reconstruct_in_guava_mode_with_exported_networks() {
-    use guava::body::{EhmModel, Posable};
-    use guava::tracking::{BodyKind, Frame, TrackedCamera, Tracking};
+    use guava::body::EhmModel;
 
     let dir = std::env::temp_dir().join(format!("guava-cli-guava-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let ehm = "tests/data/ehm_synthetic.npz";
     let body = EhmModel::load(std::path::Path::new(ehm)).expect("synthetic EHM");
-    let mut tracking = Tracking::new(
-        BodyKind::Smplx,
-        30.0,
-        body.joint_names().map(String::from).collect(),
-        Vec::new(),
-    );
-    tracking.frames.push(Frame {
-        translation: [0.0; 3],
-        rotations: vec![[0.0; 3]; body.joint_names().len()],
-        values: Vec::new(),
-        camera: Some(TrackedCamera {
-            w2c: [
-                [1.0, 0.0, 0.0, 0.0],
-                [0.0, -1.0, 0.0, 0.2],
-                [0.0, 0.0, -1.0, 22.0],
-            ],
-            invtanfov: 24.0,
-        }),
-    });
+    let tracking = crate::common::ehm_rest_tracking(None);
     let (photo, track, out) = (dir.join("p.png"), dir.join("p.json"), dir.join("p.guava"));
     tracking.save(&track).expect("tracking");
     image::RgbaImage::from_pixel(200, 200, image::Rgba([180, 120, 90, 255]))

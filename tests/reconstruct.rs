@@ -426,23 +426,12 @@ fn avatar_file_round_trips_bit_identically_and_names_bad_fields() {
     };
     expect_error(b"hello\n{}\n", "not an avatar file");
     expect_error(&bytes[..bytes.len() - 4], "the arrays take");
-    let header_end = bytes
-        .iter()
-        .enumerate()
-        .filter(|(_, b)| **b == b'\n')
-        .nth(1)
-        .expect("header")
-        .0;
-    let header = String::from_utf8(bytes[..header_end].to_vec()).expect("utf8");
-    let mut swapped = header
-        .replace("\"channels\":4", "\"channels\":99")
-        .into_bytes();
-    swapped.extend_from_slice(&bytes[header_end..]);
+    let swapped = crate::common::edit_avatar_header(&bytes, "\"channels\":4", "\"channels\":99");
     expect_error(&swapped, "channels is 99");
     // A NaN opacity in the first UV Gaussian, and a triangle index past the body's.
     let nt = avatar.template.len();
     let c = avatar.channels;
-    let uv_start = header_end + 1 + 4 * nt * (8 + c);
+    let uv_start = crate::common::avatar_header_end(&bytes) + 1 + 4 * nt * (8 + c);
     let mut bad = bytes.clone();
     bad[uv_start..uv_start + 4].copy_from_slice(&(body.triangles.len() as u32).to_le_bytes());
     expect_error(&bad, "uv triangles[0]");

@@ -106,3 +106,50 @@ pub fn assert_all_finite(image: &SplatImage, what: &str) {
         .count();
     assert_eq!(bad, 0, "{what}: {bad} non-finite output values");
 }
+
+/// A one-frame tracking of an EHM (SMPL-X) body at rest, seen as the GUAVA-mode tests see it:
+/// GUAVA's camera 22 m in front of the body, with `ehm` as its tracked skeleton.
+pub fn ehm_rest_tracking(
+    ehm: Option<guava::tracking::EhmIdentityRecord>,
+) -> guava::tracking::Tracking {
+    use guava::tracking::{BodyKind, Frame, TrackedCamera, Tracking};
+    let joints = guava::body::SMPLX_JOINTS.map(String::from).to_vec();
+    let mut t = Tracking::new(BodyKind::Smplx, 30.0, joints, Vec::new());
+    t.identity.ehm = ehm;
+    t.frames.push(Frame {
+        translation: [0.0; 3],
+        rotations: vec![[0.0; 3]; t.joints.len()],
+        values: Vec::new(),
+        camera: Some(TrackedCamera {
+            w2c: [
+                [1.0, 0.0, 0.0, 0.0],
+                [0.0, -1.0, 0.0, 0.2],
+                [0.0, 0.0, -1.0, 22.0],
+            ],
+            invtanfov: 24.0,
+        }),
+    });
+    t
+}
+
+/// An avatar file's bytes with `from` replaced by `to` in its header line (and asserted to be
+/// there), the arrays left as they were.
+pub fn edit_avatar_header(bytes: &[u8], from: &str, to: &str) -> Vec<u8> {
+    let header_end = avatar_header_end(bytes);
+    let header = String::from_utf8(bytes[..header_end].to_vec()).expect("utf8");
+    assert!(header.contains(from), "the header holds {from}");
+    let mut edited = header.replacen(from, to, 1).into_bytes();
+    edited.extend_from_slice(&bytes[header_end..]);
+    edited
+}
+
+/// Where an avatar file's header line ends (the arrays start one byte later).
+pub fn avatar_header_end(bytes: &[u8]) -> usize {
+    bytes
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| **b == b'\n')
+        .nth(1)
+        .expect("header")
+        .0
+}

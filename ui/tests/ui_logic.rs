@@ -142,6 +142,16 @@ fn the_default_body_is_shown_and_re_posed_only_when_a_slider_moves() {
     );
 }
 
+/// Renders frames until the splatting pass's stats reach the HUD (lavapipe takes seconds for an
+/// avatar); returns them.
+fn splat_stats(h: &mut Harness<'static, GuavaApp>) -> guava::render::RenderStats {
+    let start = Instant::now();
+    while h.state().report().stats.is_none() && start.elapsed() < Duration::from_secs(120) {
+        frame(h);
+    }
+    h.state().report().stats.expect("splat stats reach the HUD")
+}
+
 /// Steps the app until `done` holds or 30 s pass (loading runs on a worker thread).
 fn wait_until(h: &mut Harness<'static, GuavaApp>, done: impl Fn(&GuavaApp) -> bool) {
     let start = Instant::now();
@@ -310,11 +320,7 @@ fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
     assert!(count > 100_000 && count < 150_000, "{count}");
     assert_eq!(h.state().view(), View::Avatar);
     // The avatar goes through the splatting pass, and a pose change re-rigs and re-renders it.
-    let start = Instant::now();
-    while h.state().report().stats.is_none() && start.elapsed() < Duration::from_secs(120) {
-        frame(&mut h);
-    }
-    let stats = h.state().report().stats.expect("splat stats reach the HUD");
+    let stats = splat_stats(&mut h);
     assert_eq!(stats.input as usize, count);
     assert!(stats.visible > 50_000, "{stats:?}");
     let before = h.state().report().renders;
@@ -494,11 +500,7 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
     assert_eq!(EhmIdentityRecord::of(&ehm.identity), identity);
 
     // It goes through the splatting pass, and a pose change re-rigs and re-splats it once.
-    let start = Instant::now();
-    while h.state().report().stats.is_none() && start.elapsed() < Duration::from_secs(120) {
-        frame(&mut h);
-    }
-    let stats = h.state().report().stats.expect("splat stats reach the HUD");
+    let stats = splat_stats(&mut h);
     assert_eq!(stats.input as usize, count);
     assert!(stats.visible > 0, "{stats:?}");
     frame(&mut h);
