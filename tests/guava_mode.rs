@@ -290,7 +290,7 @@ fn extreme_views_and_nan_poses_give_finite_avatars_or_clear_errors() {
 fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
     use guava::avatar::Avatar;
     use guava::guava_mode::reconstruct_guava_file;
-    use guava::tracking::{BodyKind, EhmIdentityRecord, Frame, TrackedCamera, Tracking};
+    use guava::tracking::EhmIdentityRecord;
 
     let mut model = model();
     let mut models = models();
@@ -303,31 +303,10 @@ fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
     let mut identity = EhmIdentityRecord::of(&Default::default());
     identity.head_scale = [1.4, 1.3, 1.2];
     identity.joints_offset[16] = [0.0, 0.05, 0.0];
-    let tracking = |ehm: Option<EhmIdentityRecord>| {
-        let mut t = Tracking::new(
-            BodyKind::Smplx,
-            30.0,
-            model.joint_names().map(String::from).collect(),
-            Vec::new(),
-        );
-        t.identity.ehm = ehm;
-        t.frames.push(Frame {
-            translation: [0.0; 3],
-            rotations: vec![[0.0; 3]; model.joint_names().len()],
-            values: Vec::new(),
-            camera: Some(TrackedCamera {
-                w2c: [
-                    [1.0, 0.0, 0.0, 0.0],
-                    [0.0, -1.0, 0.0, 0.2],
-                    [0.0, 0.0, -1.0, 22.0],
-                ],
-                invtanfov: 24.0,
-            }),
-        });
-        t
-    };
     let mut run = |ehm: Option<EhmIdentityRecord>| {
-        tracking(ehm).save(&tracking_path).expect("tracking");
+        crate::common::ehm_rest_tracking(ehm)
+            .save(&tracking_path)
+            .expect("tracking");
         reconstruct_guava_file(
             &mut models,
             &model,
@@ -350,6 +329,30 @@ fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
     // The scaled head sits elsewhere in the photo, so its vertices sample other features.
     assert_ne!(tracked.template.features, neutral.template.features);
 
+    // A photo without alpha is masked by the pose model's segmentation, which takes the photo at
+    // its own input's multiple (512²), not the encoder's side (this panicked before).
+    let opaque = dir.join("opaque.png");
+    image::DynamicImage::ImageRgba8(card(d.image as u32))
+        .to_rgb8()
+        .save(&opaque)
+        .expect("opaque photo");
+    crate::common::ehm_rest_tracking(None)
+        .save(&dir.join("opaque.json"))
+        .expect("tracking");
+    let runtime = OnnxRuntime::load().expect("ONNX Runtime");
+    let mut landmarkers = guava::keypoints::Landmarkers::load(runtime).expect("shipped models");
+    let (masked, _) = reconstruct_guava_file(
+        &mut models,
+        &model,
+        &uv,
+        &opaque,
+        &dir.join("opaque.json"),
+        Some(&mut landmarkers),
+        &mut |_| true,
+    )
+    .expect("an opaque photo reconstructs");
+    assert_eq!(masked.template.len(), model.body.template.len());
+
     // Posed with its own identity, the avatar's head is the tracked size.
     let head_height = |model: &EhmModel| {
         let mut posed = PosedBody::default();
@@ -371,19 +374,11 @@ fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
     let file = dir.join("card.guava");
     tracked.save(&file).expect("save");
     assert_eq!(Avatar::load(&file).expect("load"), tracked);
-    let bytes = std::fs::read(&file).expect("read");
-    let header_end = bytes
-        .iter()
-        .enumerate()
-        .filter(|(_, b)| **b == b'\n')
-        .nth(1)
-        .expect("header")
-        .0;
-    let header = String::from_utf8(bytes[..header_end].to_vec()).expect("utf8");
-    let broken = header.replacen("\"head_scale\":[1.4,", "\"head_scale\":[0.0,", 1);
-    assert_ne!(broken, header, "the header holds the head scale");
-    let mut broken = broken.into_bytes();
-    broken.extend_from_slice(&bytes[header_end..]);
+    let broken = crate::common::edit_avatar_header(
+        &std::fs::read(&file).expect("read"),
+        "\"head_scale\":[1.4,",
+        "\"head_scale\":[0.0,",
+    );
     let err = Avatar::from_bytes(&broken, "bad.guava").expect_err("zero scale");
     assert!(err.to_string().contains("ehm_identity.head_scale"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
