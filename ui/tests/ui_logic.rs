@@ -480,6 +480,14 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
     );
     assert!(h.state().avatar_info().is_none());
 
+    // A folder without the networks: one error naming each missing file.
+    h.state_mut().open(dir.clone());
+    let status = wait_for_status(&mut h, "missing");
+    assert!(
+        status.contains("guava_encoder.onnx: missing")
+            && status.contains("guava_uv_decoder.onnx: missing"),
+        "{status}"
+    );
     h.state_mut().open(data.join("guava_onnx"));
     let status = wait_for_status(&mut h, "GUAVA networks:");
     assert!(status.contains("weights: random"), "{status}");
