@@ -185,6 +185,17 @@ fn reconstruction_with_reduced_networks_animates_and_refuses_mismatches() {
     assert!(avatar.uv.local.opacities.iter().all(|&o| o > PRUNE_OPACITY));
     assert!(report.visible_faces > 0 && report.visible_faces < model.triangles.len());
     assert!(report.observed_texels > 0 && report.observed_texels < uv.len());
+    // Every vertex is in front of this camera; the body stands inside the view.
+    assert_eq!(report.projected.len(), model.body.template.len());
+    let inside = report
+        .projected
+        .iter()
+        .filter(|p| (0.0..=1.0).contains(&p.x) && (0.0..=1.0).contains(&p.y))
+        .count();
+    assert!(
+        inside > report.projected.len() / 2,
+        "{inside} inside the view"
+    );
     assert_eq!(
         stages.len(),
         report.timings.len(),

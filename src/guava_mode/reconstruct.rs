@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Duration;
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 
 use super::models::GuavaModels;
 use super::sample::{Padding, grid_sample, project_ndc};
@@ -36,6 +36,9 @@ pub struct GuavaReport {
     /// Texels on visible faces that project into the image (nonzero features).
     pub observed_texels: usize,
     pub pruned: usize,
+    /// The source pose's vertices in front of the camera, projected into the source view in
+    /// units of the square's side (so the user can see whether the tracking fits the photo).
+    pub projected: Vec<Vec2>,
 }
 
 /// The EHM body's texel map at `size`²: the reference's own (OpenCV's fill, stored by
@@ -121,6 +124,14 @@ pub fn reconstruct_guava(
     clock.start(Stage::Rasterize, progress)?;
     let camera = Camera::guava(w2c, d.features as u32, invtanfov);
     let fragments = rasterize(&posed.vertices, &body.triangles, &camera);
+    let side = d.features as f32;
+    report.projected = posed
+        .vertices
+        .iter()
+        .map(|&v| camera.project(v))
+        .filter(|p| p.z > 0.0 && p.is_finite())
+        .map(|p| Vec2::new(p.x, p.y) / side)
+        .collect();
     let mut visible = vec![false; body.triangles.len()];
     for &t in fragments.triangle.iter().filter(|&&t| t >= 0) {
         visible[t as usize] = true;

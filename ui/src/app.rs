@@ -1,7 +1,7 @@
 //! The viewer window: menu, scene panel with camera and render controls and the HUD, status bar,
 //! drag-and-drop, and the viewport. Loading runs on a worker thread with progress and Cancel.
 
-use crate::avatar_view::{AvatarState, FitAction, SourcePreview};
+use crate::avatar_view::{AvatarState, FitAction, Preview, SourcePreview, TrackedPhoto};
 use crate::body_model::ViewerBody;
 use crate::body_panel::BodyState;
 use crate::motion::Motion;
@@ -76,12 +76,12 @@ enum Loaded {
     Motion(Imported),
     /// GUAVA's exported networks (GUAVA mode).
     Networks(Box<GuavaModels>),
-    /// An avatar file, or a reconstruction (then with a summary of what it saw, the photo with its
-    /// keypoints when the pose model ran, and the photo's camera).
+    /// An avatar file, or a reconstruction (then with a summary of what it saw, what the panel
+    /// shows of the photo, and the photo's camera).
     Avatar(
         Box<Avatar>,
         Option<String>,
-        Option<Box<SourcePreview>>,
+        Preview,
         Option<(glam::Mat4, f32)>,
     ),
 }
@@ -489,7 +489,7 @@ impl GuavaApp {
             "reading",
             move |worker_stage, worker_cancel| match kind {
                 Kind::Avatar => Avatar::load(&worker_path)
-                    .map(|a| Loaded::Avatar(Box::new(a), None, None, None))
+                    .map(|a| Loaded::Avatar(Box::new(a), None, Preview::None, None))
                     .map_err(|e| e.to_string()),
                 Kind::Photo(tracking, body) => match (&*body, tracking) {
                     (ViewerBody::Template(body), tracking) => reconstruct_worker(
@@ -630,7 +630,8 @@ impl GuavaApp {
                 )
                 .map(|(a, r)| {
                     let camera = (view.camera.view_from_world, view.camera.invtanfov());
-                    Loaded::Avatar(Box::new(a), Some(default_summary(&r)), None, Some(camera))
+                    let summary = Some(default_summary(&r));
+                    Loaded::Avatar(Box::new(a), summary, Preview::None, Some(camera))
                 })
                 .map_err(|e| e.to_string())
             },
@@ -644,7 +645,7 @@ impl GuavaApp {
         path: &Path,
         avatar: Avatar,
         summary: Option<String>,
-        preview: Option<SourcePreview>,
+        preview: Preview,
         source_camera: Option<(glam::Mat4, f32)>,
     ) {
         let Some(body) = &mut self.body else {
@@ -787,7 +788,7 @@ impl GuavaApp {
                         self.set_motion(label, imported);
                     }
                     Ok(Loaded::Avatar(avatar, summary, preview, camera)) => {
-                        self.accept_avatar(&path, *avatar, summary, preview.map(|p| *p), camera)
+                        self.accept_avatar(&path, *avatar, summary, preview, camera)
                     }
                     Err(e) => self.error(e),
                 }
@@ -938,6 +939,11 @@ impl GuavaApp {
                 egui::CollapsingHeader::new("Source photo and fit")
                     .default_open(true)
                     .show(ui, |ui| action = source.ui(ui, body));
+            }
+            if let Some(photo) = &mut avatar.tracked_photo {
+                egui::CollapsingHeader::new("Source photo and tracking")
+                    .default_open(true)
+                    .show(ui, |ui| photo.ui(ui));
             }
             ui.separator();
             if let Some(action) = action {
@@ -1304,7 +1310,8 @@ fn reconstruct_worker(
     )
     .map_err(|e| e.to_string())?;
     let camera = (view.camera.view_from_world, view.camera.invtanfov());
-    let preview = SourcePreview::new(body, photo, &report, view).map(Box::new);
+    let preview = SourcePreview::new(body, photo, &report, view)
+        .map_or(Preview::None, |p| Preview::Fit(Box::new(p)));
     Ok(Loaded::Avatar(
         Box::new(avatar),
         Some(default_summary(&report)),
@@ -1382,10 +1389,11 @@ fn guava_worker(
         "networks: {}; {} of {} texels on faces the photo shows, {} Gaussians pruned; {ms:.0} ms",
         models.source, r.observed_texels, r.texels, r.pruned
     );
+    let preview = TrackedPhoto::new(photo, &r.projected).map_or(Preview::None, Preview::Tracked);
     Ok(Loaded::Avatar(
         Box::new(avatar),
         Some(summary),
-        None,
+        preview,
         Some(camera),
     ))
 }

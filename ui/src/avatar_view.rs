@@ -19,6 +19,8 @@ pub struct AvatarState {
     /// What it is and where it came from, shown in the panel.
     pub label: String,
     pub source: Option<SourcePreview>,
+    /// A GUAVA-mode avatar's photo with its tracked body over it.
+    pub tracked_photo: Option<TrackedPhoto>,
     /// The source photo's camera (world→camera, `invtanfov`), when the avatar was made here.
     pub source_camera: Option<(glam::Mat4, f32)>,
     rig: Rig,
@@ -30,13 +32,19 @@ impl AvatarState {
     pub fn new(
         avatar: Avatar,
         label: String,
-        source: Option<SourcePreview>,
+        preview: Preview,
         source_camera: Option<(glam::Mat4, f32)>,
     ) -> Self {
+        let (source, tracked_photo) = match preview {
+            Preview::None => (None, None),
+            Preview::Fit(p) => (Some(*p), None),
+            Preview::Tracked(p) => (None, Some(p)),
+        };
         Self {
             avatar: Arc::new(avatar),
             label,
             source,
+            tracked_photo,
             source_camera,
             rig: Rig::default(),
             rigged_for: None,
@@ -73,12 +81,93 @@ impl AvatarState {
     }
 }
 
+/// What the avatar panel shows of the photo an avatar was made from.
+pub enum Preview {
+    None,
+    /// The default reconstruction's keypoints and fit, adjustable by hand.
+    Fit(Box<SourcePreview>),
+    /// GUAVA mode: the tracked body over the photo.
+    Tracked(TrackedPhoto),
+}
+
+/// A source photo (its square crop at the reconstruction's size) as an egui image.
+struct Photo {
+    image: egui::ColorImage,
+    texture: Option<egui::TextureHandle>,
+}
+
+impl Photo {
+    fn load(photo: &Path) -> Option<Self> {
+        let source = SourceImage::load(photo).ok()?;
+        let size = source.size as usize;
+        let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+        let pixels = source
+            .rgb
+            .chunks_exact(3)
+            .map(|c| egui::Color32::from_rgb(q(c[0]), q(c[1]), q(c[2])))
+            .collect();
+        Some(Self {
+            image: egui::ColorImage::new([size, size], pixels),
+            texture: None,
+        })
+    }
+
+    /// Shows the photo (uploaded once; the image is copied only then); returns where it was drawn
+    /// and its pixels' scale on screen.
+    fn show(&mut self, ui: &mut egui::Ui) -> (egui::Rect, f32) {
+        let texture = self.texture.get_or_insert_with(|| {
+            ui.ctx()
+                .load_texture("source photo", self.image.clone(), Default::default())
+        });
+        let side = ui.available_width().min(320.0);
+        let response = ui.add(egui::Image::new((texture.id(), egui::vec2(side, side))));
+        (response.rect, side / self.image.size[0] as f32)
+    }
+}
+
+/// The photo a GUAVA-mode avatar was made from with its tracked body's vertices over it, so the
+/// user sees whether the tracking lines up with the photo (GUAVA samples the photo there).
+pub struct TrackedPhoto {
+    photo: Photo,
+    /// Projected vertices in units of the photo's side, thinned for drawing.
+    points: Vec<Vec2>,
+}
+
+/// Every how many projected vertices one is drawn (EHM has ~10k).
+const TRACKED_POINT_STRIDE: usize = 8;
+
+impl TrackedPhoto {
+    /// `None` when the photo cannot be read again.
+    pub fn new(photo: &Path, projected: &[Vec2]) -> Option<Self> {
+        Some(Self {
+            photo: Photo::load(photo)?,
+            points: projected
+                .iter()
+                .step_by(TRACKED_POINT_STRIDE)
+                .copied()
+                .collect(),
+        })
+    }
+
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        let (rect, _) = self.photo.show(ui);
+        let painter = ui.painter_at(rect);
+        let colour = egui::Color32::from_rgba_unmultiplied(240, 60, 60, 160);
+        for p in &self.points {
+            painter.circle_filled(rect.min + egui::vec2(p.x, p.y) * rect.width(), 1.0, colour);
+        }
+        ui.label(format!(
+            "red: the tracked body (every {TRACKED_POINT_STRIDE}th vertex) where the tracking puts \
+             it; GUAVA samples the photo there"
+        ));
+    }
+}
+
 /// The source photo with the keypoint models' points and where the fitted (or tracked) body puts
 /// the same landmarks, so the user can judge the fit, adjust it by hand with the body sliders and
 /// reconstruct the photo again with the adjusted pose.
 pub struct SourcePreview {
-    image: egui::ColorImage,
-    texture: Option<egui::TextureHandle>,
+    photo_image: Photo,
     /// The photo and the pose and camera its avatar was made with.
     pub photo: PathBuf,
     pub view: SourceView,
@@ -112,16 +201,6 @@ impl SourcePreview {
         if report.keypoints.is_empty() {
             return None;
         }
-        let source = SourceImage::load(photo).ok()?;
-        let size = source.size as usize;
-        let pixels = source
-            .rgb
-            .chunks_exact(3)
-            .map(|c| {
-                let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-                egui::Color32::from_rgb(q(c[0]), q(c[1]), q(c[2]))
-            })
-            .collect();
         let keypoints = report
             .keypoints
             .iter()
@@ -145,8 +224,7 @@ impl SourcePreview {
             .flat_map(|h| h.observed.iter().copied().zip(h.targets.iter().cloned()));
         let detail = face.chain(hands).collect();
         let mut preview = Self {
-            image: egui::ColorImage::new([size, size], pixels),
-            texture: None,
+            photo_image: Photo::load(photo)?,
             photo: photo.to_path_buf(),
             view,
             keypoints,
@@ -191,15 +269,7 @@ impl SourcePreview {
                 self.fitted_for = Some(generation);
             }
         }
-        // Uploaded once; the image is copied only then.
-        let texture = self.texture.get_or_insert_with(|| {
-            ui.ctx()
-                .load_texture("source photo", self.image.clone(), Default::default())
-        });
-        let side = ui.available_width().min(320.0);
-        let response = ui.add(egui::Image::new((texture.id(), egui::vec2(side, side))));
-        let rect = response.rect;
-        let scale = side / self.image.size[0] as f32;
+        let (rect, scale) = self.photo_image.show(ui);
         let to_screen = |p: Vec2| rect.min + egui::vec2(p.x, p.y) * scale;
         let painter = ui.painter_at(rect);
         let (green, red) = (

@@ -511,6 +511,9 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
     let stats = splat_stats(&mut h);
     assert_eq!(stats.input as usize, count);
     assert!(stats.visible > 0, "{stats:?}");
+    // The panel shows the photo with the tracked body over it.
+    h.get_by_label("Source photo and tracking");
+    h.get_by_label_contains("red: the tracked body");
     frame(&mut h);
     let before = h.state().report().renders;
     let body = h.state_mut().body_mut().expect("body");
