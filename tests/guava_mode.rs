@@ -340,8 +340,8 @@ fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
     // The scaled head sits elsewhere in the photo, so its vertices sample other features.
     assert_ne!(tracked.template.features, neutral.template.features);
 
-    // A photo without alpha is masked by the pose model's segmentation, which takes the photo at
-    // its own input's multiple (512²), not the encoder's side (this panicked before).
+    // A photo without alpha is masked by the pose model's segmentation, at the encoder's side,
+    // which the pose model's 256² input does not divide (this panicked before).
     let opaque = dir.join("opaque.png");
     image::DynamicImage::ImageRgba8(card(d.image as u32))
         .to_rgb8()

@@ -227,9 +227,6 @@ pub fn reconstruct_guava_file(
 ) -> Result<(Avatar, GuavaReport), ReconstructError> {
     let mut image = SourceImage::load_at(photo, models.dims.image as u32)?;
     if image.mask.is_none() {
-        // The pose model takes the photo at the size its input divides (512², not the encoder's
-        // 518²); its person mask is resampled to the encoder's size.
-        let at_pose_size = SourceImage::load(photo)?;
         let pose = landmarkers
             .ok_or_else(|| ReconstructError::Image {
                 file: photo.display().to_string(),
@@ -238,7 +235,7 @@ pub fn reconstruct_guava_file(
                         .into(),
             })?
             .pose
-            .detect(&at_pose_size)
+            .detect(&image)
             .map_err(|e| ReconstructError::Keypoints(e.to_string()))?;
         image.apply_mask(pose.mask_at(image.size as usize));
     }

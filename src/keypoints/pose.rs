@@ -141,14 +141,22 @@ impl PoseLandmarker {
     }
 }
 
-/// A `side`² RGB image in [0, 1] (interleaved) box-filtered down to the model's 256² input;
-/// `side` must be a multiple of 256.
+/// A `side`² RGB image in [0, 1] (interleaved) as the model's 256² input: box-filtered when
+/// `side` is a multiple of 256 (the source images are 512²), else sampled bilinearly at the input
+/// pixels' centres (another side, such as GUAVA's 518², works, a little less smoothly).
 fn downsample_to_input(rgb: &[f32], side: usize) -> Vec<f32> {
     let k = side / POSE_INPUT;
-    assert!(
-        k >= 1 && k * POSE_INPUT == side,
-        "side {side} is not a multiple of 256"
-    );
+    if k == 0 || k * POSE_INPUT != side {
+        let scale = side as f32 / POSE_INPUT as f32;
+        let centre = |i: usize| (i as f32 + 0.5) * scale - 0.5;
+        return (0..POSE_INPUT * POSE_INPUT * 3)
+            .map(|i| {
+                let (p, c) = (i / 3, i % 3);
+                let (x, y) = (centre(p % POSE_INPUT), centre(p / POSE_INPUT));
+                bilinear_clamped(side, x, y, |q| rgb[q * 3 + c])
+            })
+            .collect();
+    }
     let mut out = vec![0.0; POSE_INPUT * POSE_INPUT * 3];
     let norm = 1.0 / (k * k) as f32;
     for y in 0..side {
