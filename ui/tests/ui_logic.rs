@@ -152,6 +152,23 @@ fn splat_stats(h: &mut Harness<'static, GuavaApp>) -> guava::render::RenderStats
     h.state().report().stats.expect("splat stats reach the HUD")
 }
 
+/// Turns `joint` of the shown body by `angle` radians about z: the avatar is re-rigged and
+/// splatted exactly once.
+fn turning_a_joint_splats_once(h: &mut Harness<'static, GuavaApp>, joint: &str, angle: f32) {
+    let before = h.state().report().renders;
+    let body = h.state_mut().body_mut().expect("body");
+    let model = body.model.clone();
+    body.pose
+        .set_rotation(model.as_ref(), joint, glam::Vec3::new(0.0, 0.0, angle))
+        .expect("joint");
+    frame(h);
+    assert_eq!(
+        h.state().report().renders,
+        before + 1,
+        "a pose change splats once"
+    );
+}
+
 /// Steps the app until `done` holds or 30 s pass (loading runs on a worker thread).
 fn wait_until(h: &mut Harness<'static, GuavaApp>, done: impl Fn(&GuavaApp) -> bool) {
     let start = Instant::now();
@@ -330,22 +347,7 @@ fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
         before,
         "an unchanged pose is not re-splatted"
     );
-    let body_state = h.state_mut().body_mut().expect("body");
-    let model = body_state.model.clone();
-    body_state
-        .pose
-        .set_rotation(
-            model.as_ref(),
-            "upperarm01.L",
-            glam::Vec3::new(0.0, 0.0, 1.2),
-        )
-        .expect("joint");
-    frame(&mut h);
-    assert_eq!(
-        h.state().report().renders,
-        before + 1,
-        "a pose change splats once"
-    );
+    turning_a_joint_splats_once(&mut h, "upperarm01.L", 1.2);
     // Looking through the photo's camera renders once, from there.
     h.state_mut().set_camera_mode(CameraMode::Source);
     frame(&mut h);
@@ -515,18 +517,7 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
     h.get_by_label("Source photo and tracking");
     h.get_by_label_contains("red: the tracked body");
     frame(&mut h);
-    let before = h.state().report().renders;
-    let body = h.state_mut().body_mut().expect("body");
-    let model = body.model.clone();
-    body.pose
-        .set_rotation(model.as_ref(), "left_elbow", glam::Vec3::new(0.0, 0.0, 1.0))
-        .expect("joint");
-    frame(&mut h);
-    assert_eq!(
-        h.state().report().renders,
-        before + 1,
-        "a pose change splats once"
-    );
+    turning_a_joint_splats_once(&mut h, "left_elbow", 1.0);
 
     // A photo without its tracking: named, and the avatar stays.
     let lone = dir.join("lone.png");
