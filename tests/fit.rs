@@ -243,21 +243,42 @@ fn the_demo_portrait_fits_and_reconstructs() {
     assert_eq!(report.mask, MaskSource::Segmentation);
     assert!(report.observed > 20_000, "{report:?}");
     avatar.validate().expect("finite avatar");
-    // The shipped tracking is what the fit gives (guava fit wrote it).
+    // The shipped tracking (guava fit wrote it) fits the photo as well as this fit does. Camera
+    // depth is not what is compared: 2D points leave a flat valley that trades camera distance
+    // against body height, and the last bits of a machine's maths move the fit along it (12.51 to
+    // 12.87 m for starts 0.1 % to 1 % apart, all at 3.7–3.8 px), so what is compared is where
+    // each puts the body keypoints the fit used.
     let shipped =
         guava::tracking::Tracking::load(&data("assets/demo_portrait.json")).expect("shipped");
-    let camera = shipped.frames[0].camera.expect("camera");
-    for r in 0..3 {
-        let row = view.camera.view_from_world.row(r);
-        for c in 0..4 {
-            assert!(
-                (row[c] - camera.w2c[r][c]).abs() < 1e-3,
-                "w2c[{r}][{c}]: {} vs {}",
-                row[c],
-                camera.w2c[r][c]
-            );
-        }
-    }
+    let shipped = guava::reconstruct::SourceView::from_tracking(&shipped, &body, "shipped")
+        .expect("a view of the default body");
+    let keypoint_rms = |v: &guava::reconstruct::SourceView| {
+        let mut posed = PosedBody::default();
+        body.pose(&v.pose, &mut posed).expect("pose");
+        let marks = body.landmark_positions(&posed.vertices);
+        let used: Vec<f32> = report
+            .keypoints
+            .iter()
+            .filter(|k| k.confidence >= guava::fit::MIN_CONFIDENCE)
+            .map(|k| {
+                let l = body.landmarks.iter().position(|l| l.name == k.name);
+                let q = v.camera.project(marks[l.expect("a body landmark")]);
+                Vec2::new(q.x, q.y).distance_squared(k.pixel)
+            })
+            .collect();
+        (used.iter().sum::<f32>() / used.len() as f32).sqrt()
+    };
+    let (fitted_rms, shipped_rms) = (keypoint_rms(&view), keypoint_rms(&shipped));
+    println!("body keypoints: fitted {fitted_rms:.2} px RMS, shipped tracking {shipped_rms:.2} px");
+    assert!(
+        (fitted_rms - fit.rms_px).abs() < 0.05,
+        "{fitted_rms} vs the fit's {}",
+        fit.rms_px
+    );
+    assert!(
+        shipped_rms < fitted_rms + 0.5,
+        "the shipped tracking is {shipped_rms} px RMS, the fit {fitted_rms}"
+    );
 }
 
 #[test]
