@@ -31,6 +31,10 @@ const TILE_PIXELS: u32 = TILE_SIZE * TILE_SIZE;
 // floats, which some GPUs flush to zero.
 var<workgroup> batch_xy_depth_id: array<vec4<u32>, BATCH>;
 var<workgroup> batch_conic_opacity: array<vec4<f32>, BATCH>;
+// Up to four feature channels ride with the batch: one vec4 load per Gaussian and thread instead of
+// one storage-buffer load per channel for every pixel it shades (the RGB case on CPU adapters).
+const PACKED: bool = CHANNELS <= 4u;
+var<workgroup> batch_features: array<vec4<f32>, BATCH>;
 var<workgroup> num_done: atomic<u32>;
 var<workgroup> done_snapshot: u32;
 
@@ -76,6 +80,13 @@ fn main(
             let p = projected[id];
             batch_xy_depth_id[lid] = vec4<u32>(bitcast<vec2<u32>>(p.xy), bitcast<u32>(1.0 / p.depth), id);
             batch_conic_opacity[lid] = p.conic_opacity;
+            if PACKED {
+                var f = vec4<f32>();
+                for (var c = 0u; c < CHANNELS; c++) {
+                    f[c] = features[id * CHANNELS + c];
+                }
+                batch_features[lid] = f;
+            }
         }
         workgroupBarrier();
         let n = min(BATCH, range.y - start);
@@ -85,6 +96,10 @@ fn main(
             let co = batch_conic_opacity[j];
             let gaussian_inv_depth = bitcast<f32>(packed.z);
             let base = packed.w * CHANNELS;
+            var packed_features = vec4<f32>();
+            if PACKED {
+                packed_features = batch_features[j];
+            }
             for (var k = 0u; k < PIXELS; k++) {
                 if done[k] {
                     continue;
@@ -107,8 +122,14 @@ fn main(
                     continue;
                 }
                 let w = alpha * t[k];
-                for (var c = 0u; c < CHANNELS; c++) {
-                    acc[k * CHANNELS + c] += features[base + c] * w;
+                if PACKED {
+                    for (var c = 0u; c < CHANNELS; c++) {
+                        acc[k * CHANNELS + c] += packed_features[c] * w;
+                    }
+                } else {
+                    for (var c = 0u; c < CHANNELS; c++) {
+                        acc[k * CHANNELS + c] += features[base + c] * w;
+                    }
                 }
                 inv_depth[k] += gaussian_inv_depth * w;
                 t[k] = test_t;
