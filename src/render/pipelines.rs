@@ -84,11 +84,15 @@ fn compute_pipeline(
 /// 1,307–1,324 with 8; 32 channels fastest with 1 (2 per thread: 8,110–8,199 ms against
 /// 6,374–6,558). 16 (a whole column per thread, 1,156–1,234 ms) drew one tile of the demo
 /// portrait's avatar wrong on lavapipe (rows 1–15 of a tile; cause not found), so it is not used.
+/// Once up to four channels rode with the batch in workgroup memory, 8 lost its edge: 150k, 512²,
+/// 3 channels rasterize in 105–118 ms with 4 and 105–115 with 8, and 4 channels (the default
+/// avatars) in 92–101 ms with 4 against 174–190 with 8 (the accumulators of 8 pixels × 4
+/// channels no longer fit), so 4 is the CPU layout up to four channels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RasterTuning {
     /// The same count for every channel count: 1, 2, 4, 8 or 16 (divisors of the tile side).
     PixelsPerThread(u32),
-    /// 8 pixels per thread up to 4 channels, 1 above.
+    /// 4 pixels per thread up to 4 channels, 1 above.
     Cpu,
 }
 
@@ -104,7 +108,7 @@ impl RasterTuning {
     pub fn pixels_per_thread(self, channels: u32) -> u32 {
         match self {
             Self::PixelsPerThread(p) => p,
-            Self::Cpu if channels <= 4 => 8,
+            Self::Cpu if channels <= 4 => 4,
             Self::Cpu => 1,
         }
     }

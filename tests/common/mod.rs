@@ -15,10 +15,10 @@ fn gpu() -> GpuContext {
         .expect("a Vulkan adapter (lavapipe: apt-get install mesa-vulkan-drivers)")
 }
 
-/// Renderers for the rasterizer's thread layouts (1 pixel per thread, the GPU default; 8, the
+/// Renderers for the rasterizer's thread layouts (1 pixel per thread, the GPU default; 4, the
 /// CPU default for few channels), so each is tested whatever the adapter.
 pub fn renderers() -> Vec<HeadlessRenderer> {
-    [1, 8]
+    [1, 4]
         .map(|p| HeadlessRenderer::with_tuning(gpu(), RasterTuning::PixelsPerThread(p)))
         .into()
 }
