@@ -473,6 +473,15 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
         "EHM's sliders are shown"
     );
 
+    // A broken EHM file is named and the EHM body stays.
+    let broken = dir.join("broken_ehm.npz");
+    let bytes = std::fs::read(data.join("ehm_synthetic.npz")).expect("read");
+    std::fs::write(&broken, &bytes[..bytes.len() / 2]).expect("write");
+    h.state_mut().open(broken);
+    let status = wait_for_status(&mut h, "broken_ehm.npz");
+    assert!(status.contains("broken_ehm.npz: "), "{status}");
+    assert_eq!(h.state().body_label().unwrap_or_default(), label);
+
     // Without the networks: a clear error, no avatar.
     h.state_mut().open(photo.clone());
     let status = wait_for_status(&mut h, "networks");
