@@ -44,7 +44,8 @@ fn main(
     var finite = is_finite(g.pos.x) && is_finite(g.pos.y) && is_finite(g.pos.z) && is_finite(g.opacity)
         && is_finite(g.rot.x) && is_finite(g.rot.y) && is_finite(g.rot.z) && is_finite(g.rot.w)
         && is_finite(g.scale.x) && is_finite(g.scale.y) && is_finite(g.scale.z);
-    let base = i * frame.channels;
+    // Each Gaussian's features are padded to a multiple of four (see the rasterizer).
+    let base = i * ((frame.channels + 3u) / 4u) * 4u;
     for (var c = 0u; c < frame.channels; c++) {
         finite = finite && is_finite(features[base + c]);
     }

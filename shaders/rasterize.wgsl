@@ -14,7 +14,9 @@
 @group(0) @binding(1) var<storage, read> ranges: array<vec2<u32>>;
 @group(0) @binding(2) var<storage, read> tile_vals: array<u32>;
 @group(0) @binding(3) var<storage, read> projected: array<Projected>;
-@group(0) @binding(4) var<storage, read> features: array<f32>;
+// Each Gaussian's features as FEATURE_WORDS vec4s (zero-padded to a multiple of four channels): a
+// pixel reads a quarter as many words as with one float per load.
+@group(0) @binding(4) var<storage, read> features: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> background: array<f32>;
 @group(0) @binding(6) var out_features: texture_storage_2d_array<r32float, write>;
 // Layer 0: accumulated alpha 1 − T; layer 1: Σ αT/z.
@@ -34,6 +36,7 @@ var<workgroup> batch_conic_opacity: array<vec4<f32>, BATCH>;
 // Up to four feature channels ride with the batch: one vec4 load per Gaussian and thread instead of
 // one storage-buffer load per channel for every pixel it shades (the RGB case on CPU adapters).
 const PACKED: bool = CHANNELS <= 4u;
+const FEATURE_WORDS: u32 = (CHANNELS + 3u) / 4u;
 var<workgroup> batch_features: array<vec4<f32>, BATCH>;
 var<workgroup> num_done: atomic<u32>;
 var<workgroup> done_snapshot: u32;
@@ -81,11 +84,7 @@ fn main(
             batch_xy_depth_id[lid] = vec4<u32>(bitcast<vec2<u32>>(p.xy), bitcast<u32>(1.0 / p.depth), id);
             batch_conic_opacity[lid] = p.conic_opacity;
             if PACKED {
-                var f = vec4<f32>();
-                for (var c = 0u; c < CHANNELS; c++) {
-                    f[c] = features[id * CHANNELS + c];
-                }
-                batch_features[lid] = f;
+                batch_features[lid] = features[id];
             }
         }
         workgroupBarrier();
@@ -95,7 +94,7 @@ fn main(
             let xy = bitcast<vec2<f32>>(packed.xy);
             let co = batch_conic_opacity[j];
             let gaussian_inv_depth = bitcast<f32>(packed.z);
-            let base = packed.w * CHANNELS;
+            let base = packed.w * FEATURE_WORDS;
             var packed_features = vec4<f32>();
             if PACKED {
                 packed_features = batch_features[j];
@@ -127,8 +126,14 @@ fn main(
                         acc[k * CHANNELS + c] += packed_features[c] * w;
                     }
                 } else {
-                    for (var c = 0u; c < CHANNELS; c++) {
-                        acc[k * CHANNELS + c] += features[base + c] * w;
+                    for (var q = 0u; q < FEATURE_WORDS; q++) {
+                        let f = features[base + q];
+                        for (var i = 0u; i < 4u; i++) {
+                            let c = 4u * q + i;
+                            if c < CHANNELS {
+                                acc[k * CHANNELS + c] += f[i] * w;
+                            }
+                        }
                     }
                 }
                 inv_depth[k] += gaussian_inv_depth * w;

@@ -88,6 +88,25 @@ fn thirty_two_channels() {
     check("random 32ch 160²", &cloud, &camera, &background);
 }
 
+/// The GPU keeps each Gaussian's features padded to a multiple of four and reads them as vec4s (up
+/// to four ride in workgroup memory): counts on either side of that boundary match the reference
+/// channel for channel.
+#[test]
+fn channel_counts_around_the_vec4_padding() {
+    for (channels, seed) in [(4, 5), (5, 6), (7, 7)] {
+        let cloud = BallCloud::new(1500, channels, seed).generate();
+        let camera =
+            Camera::from_fov_y(orbit(Vec3::ZERO, 3.0, 0.3, 0.1), 96, 80, 50f32.to_radians());
+        let background: Vec<f32> = (0..channels).map(|c| c as f32 / 16.0).collect();
+        check(
+            &format!("random {channels}ch 96×80"),
+            &cloud,
+            &camera,
+            &background,
+        );
+    }
+}
+
 #[test]
 fn guava_camera_512() {
     // GUAVA's camera: invtanfov 24, 512², w2c ≈ [I | (tx, ty, 24/s)] as the tracker produces.

@@ -147,11 +147,17 @@ fn output_texture(
 }
 
 /// The largest cloud with `channels` channels whose buffers the device can bind.
+/// Floats per Gaussian in the GPU feature buffer: the channels padded to a multiple of four, which
+/// the rasterizer reads as vec4s.
+pub fn feature_stride(channels: u32) -> u32 {
+    channels.div_ceil(4) * 4
+}
+
 pub fn max_gaussians(limits: &wgpu::Limits, channels: u32) -> u64 {
     let max_binding = limits
         .max_storage_buffer_binding_size
         .min(limits.max_buffer_size);
-    let per_gaussian = (channels as u64 * 4).max(size_of::<GpuGaussian>() as u64);
+    let per_gaussian = (feature_stride(channels) as u64 * 4).max(size_of::<GpuGaussian>() as u64);
     (max_binding / per_gaussian).min(u32::MAX as u64)
 }
 
@@ -239,7 +245,19 @@ impl Splatter {
             })
             .collect();
         queue.write_buffer(&buffers.gaussians, 0, bytemuck::cast_slice(&gpu));
-        queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(&cloud.features));
+        let c = cloud.channels;
+        if c % 4 == 0 {
+            queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(&cloud.features));
+        } else {
+            let mut padded = vec![0.0f32; cloud.len() * feature_stride(c as u32) as usize];
+            for (to, from) in padded
+                .chunks_exact_mut(feature_stride(c as u32) as usize)
+                .zip(cloud.features.chunks_exact(c))
+            {
+                to[..c].copy_from_slice(from);
+            }
+            queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(&padded));
+        }
         queue.write_buffer(&self.depth_count, 0, bytemuck::bytes_of(&n));
         self.num_gaussians = n;
         Ok(())
@@ -255,7 +273,11 @@ impl Splatter {
                 "Splat::gaussians",
                 n * size_of::<GpuGaussian>() as u64,
             ),
-            features: storage(device, "Splat::features", n * channels as u64 * 4),
+            features: storage(
+                device,
+                "Splat::features",
+                n * feature_stride(channels) as u64 * 4,
+            ),
             projected: storage(device, "Splat::projected", n * PROJECTED_SIZE),
             depth_keys: storage(device, "Splat::depth_keys", n * 4),
             depth_order: storage(device, "Splat::depth_order", n * 4),
@@ -619,7 +641,10 @@ impl Splatter {
     /// GPU memory held: (bytes per Gaussian of capacity, bytes per tile pair of capacity, the rest).
     pub fn memory(&self) -> MemoryUse {
         let per_gaussian = |c: &CloudBuffers| {
-            size_of::<GpuGaussian>() as u64 + c.channels as u64 * 4 + PROJECTED_SIZE + 6 * 4
+            size_of::<GpuGaussian>() as u64
+                + feature_stride(c.channels) as u64 * 4
+                + PROJECTED_SIZE
+                + 6 * 4
         };
         MemoryUse {
             gaussian_capacity: self.cloud.as_ref().map_or(0, |c| c.capacity as u64),
