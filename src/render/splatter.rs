@@ -245,13 +245,16 @@ impl Splatter {
             })
             .collect();
         queue.write_buffer(&buffers.gaussians, 0, bytemuck::cast_slice(&gpu));
-        let c = cloud.channels;
-        if c % 4 == 0 {
+        let (c, stride) = (
+            cloud.channels,
+            feature_stride(cloud.channels as u32) as usize,
+        );
+        if c == stride {
             queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(&cloud.features));
         } else {
-            let mut padded = vec![0.0f32; cloud.len() * feature_stride(c as u32) as usize];
+            let mut padded = vec![0.0f32; cloud.len() * stride];
             for (to, from) in padded
-                .chunks_exact_mut(feature_stride(c as u32) as usize)
+                .chunks_exact_mut(stride)
                 .zip(cloud.features.chunks_exact(c))
             {
                 to[..c].copy_from_slice(from);
