@@ -17,6 +17,7 @@
 // Each Gaussian's features as FEATURE_WORDS vec4s (zero-padded to a multiple of four channels): a
 // pixel reads a quarter as many words as with one float per load.
 @group(0) @binding(4) var<storage, read> features: array<vec4<f32>>;
+const FEATURE_WORDS: u32 = (CHANNELS + 3u) / 4u;
 @group(0) @binding(5) var<storage, read> background: array<f32>;
 @group(0) @binding(6) var out_features: texture_storage_2d_array<r32float, write>;
 // Layer 0: accumulated alpha 1 − T; layer 1: Σ αT/z.
@@ -36,7 +37,6 @@ var<workgroup> batch_conic_opacity: array<vec4<f32>, BATCH>;
 // Up to four feature channels ride with the batch: one vec4 load per Gaussian and thread instead of
 // one storage-buffer load per channel for every pixel it shades (the RGB case on CPU adapters).
 const PACKED: bool = CHANNELS <= 4u;
-const FEATURE_WORDS: u32 = (CHANNELS + 3u) / 4u;
 var<workgroup> batch_features: array<vec4<f32>, BATCH>;
 var<workgroup> num_done: atomic<u32>;
 var<workgroup> done_snapshot: u32;

@@ -468,7 +468,7 @@ fn reconstruct_guava(
     let beside = guava::reconstruct::tracking_beside(image);
     let tracking = tracking.unwrap_or(&beside);
     let mut landmarkers = landmarkers(keypoint_models).ok();
-    let (avatar, report) = reconstruct_guava_file(
+    let (avatar, report, _) = reconstruct_guava_file(
         &mut models,
         &body,
         &uv,

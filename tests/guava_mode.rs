@@ -352,7 +352,7 @@ fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
         .expect("tracking");
     let runtime = OnnxRuntime::load().expect("ONNX Runtime");
     let mut landmarkers = guava::keypoints::Landmarkers::load(runtime).expect("shipped models");
-    let (masked, _) = reconstruct_guava_file(
+    let (masked, _, _) = reconstruct_guava_file(
         &mut models,
         &model,
         &uv,

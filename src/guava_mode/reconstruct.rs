@@ -215,7 +215,7 @@ pub fn reconstruct_guava(
 /// Reads `photo` at the encoder's size, masks it (its alpha, else the pose model's person
 /// segmentation when `landmarkers` are given, else refused: GUAVA's encoder was trained on
 /// masked photos), takes frame 0 of `tracking` on `body` (with the tracking's EHM identity) as the
-/// source view and runs [`reconstruct_guava`]. Every error names its file.
+/// source view and runs [`reconstruct_guava`]; also returns that view. Every error names its file.
 pub fn reconstruct_guava_file(
     models: &mut GuavaModels,
     body: &EhmModel,
@@ -224,7 +224,7 @@ pub fn reconstruct_guava_file(
     tracking: &Path,
     landmarkers: Option<&mut Landmarkers>,
     progress: &mut dyn FnMut(Stage) -> bool,
-) -> Result<(Avatar, GuavaReport), ReconstructError> {
+) -> Result<(Avatar, GuavaReport, SourceView), ReconstructError> {
     let mut image = SourceImage::load_at(photo, models.dims.image as u32)?;
     if image.mask.is_none() {
         let pose = landmarkers
@@ -253,12 +253,14 @@ pub fn reconstruct_guava_file(
         .ehm
         .as_ref()
         .map_or_else(Default::default, EhmIdentityRecord::to_identity);
-    if identity == body.identity {
-        return reconstruct_guava(models, body, uv, &view, &image, &source, progress);
-    }
-    let mut tracked = body.clone();
-    tracked.identity = identity;
-    reconstruct_guava(models, &tracked, uv, &view, &image, &source, progress)
+    let (avatar, report) = if identity == body.identity {
+        reconstruct_guava(models, body, uv, &view, &image, &source, progress)?
+    } else {
+        let mut tracked = body.clone();
+        tracked.identity = identity;
+        reconstruct_guava(models, &tracked, uv, &view, &image, &source, progress)?
+    };
+    Ok((avatar, report, view))
 }
 
 /// The source camera as GUAVA's sampling sees it.

@@ -146,13 +146,13 @@ fn output_texture(
     })
 }
 
-/// The largest cloud with `channels` channels whose buffers the device can bind.
 /// Floats per Gaussian in the GPU feature buffer: the channels padded to a multiple of four, which
 /// the rasterizer reads as vec4s.
 pub fn feature_stride(channels: u32) -> u32 {
     channels.div_ceil(4) * 4
 }
 
+/// The largest cloud with `channels` channels whose buffers the device can bind.
 pub fn max_gaussians(limits: &wgpu::Limits, channels: u32) -> u64 {
     let max_binding = limits
         .max_storage_buffer_binding_size

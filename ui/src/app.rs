@@ -188,7 +188,7 @@ impl GuavaApp {
     fn load_default_body(&mut self) {
         match BodyModel::default_body() {
             Ok(model) => self.set_body(
-                ViewerBody::Template(Box::new(model)),
+                ViewerBody::Template(Arc::new(model)),
                 "default body template",
             ),
             Err(e) => self.error(e.to_string()),
@@ -515,7 +515,7 @@ impl GuavaApp {
                     )),
                 },
                 Kind::Body => BodyModel::load(&worker_path)
-                    .map(|m| Loaded::Body(ViewerBody::Template(Box::new(m))))
+                    .map(|m| Loaded::Body(ViewerBody::Template(Arc::new(m))))
                     .map_err(|e| e.to_string()),
                 Kind::Npz => open_npz(&worker_path),
                 Kind::Networks => {
@@ -579,7 +579,7 @@ impl GuavaApp {
     /// on); otherwise says so and gives `None`.
     fn template_body(&mut self) -> Option<Arc<BodyModel>> {
         match self.body.as_ref().map(|b| &*b.model) {
-            Some(ViewerBody::Template(m)) => Some(Arc::new(BodyModel::clone(m))),
+            Some(ViewerBody::Template(m)) => Some(m.clone()),
             Some(ViewerBody::Ehm(_)) => {
                 self.error(
                     "the default reconstruction works on a body template; the current body is \
@@ -1363,10 +1363,6 @@ fn guava_worker(
             photo.display()
         )
     })?;
-    let name = tracking.display().to_string();
-    let tracked = guava::tracking::Tracking::load(tracking).map_err(|e| e.to_string())?;
-    let camera = guava::tracking::camera_at(&tracked, 0.0)
-        .ok_or_else(|| format!("{name}: frame 0: camera: missing (reconstruction needs it)"))?;
     *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the pose model";
     // Only for a person mask when the photo has no alpha.
     let mut landmarkers = guava::onnx::OnnxRuntime::load()
@@ -1374,7 +1370,7 @@ fn guava_worker(
         .and_then(|rt| guava::keypoints::Landmarkers::load(rt).ok());
     let mut models = networks.lock().unwrap_or_else(|e| e.into_inner());
     let uv = uv_map(body, models.dims.uv as u32);
-    let (avatar, r) = reconstruct_guava_file(
+    let (avatar, r, view) = reconstruct_guava_file(
         &mut models,
         body,
         &uv,
@@ -1390,6 +1386,7 @@ fn guava_worker(
         models.source, r.observed_texels, r.texels, r.pruned
     );
     let preview = TrackedPhoto::new(photo, &r.projected).map_or(Preview::None, Preview::Tracked);
+    let camera = (view.camera.view_from_world, view.camera.invtanfov());
     Ok(Loaded::Avatar(
         Box::new(avatar),
         Some(summary),

@@ -2,12 +2,15 @@
 //! EHM (GUAVA mode, from the user's converted SMPL-X and FLAME). One posing API ([`Posable`]) for
 //! both, so the sliders, the motion and the avatar treat them alike.
 
+use std::sync::Arc;
+
 use guava::body::{BodyModel, BodyPose, EhmModel, Posable, PoseError, PosedBody, TargetGroup};
 
 #[derive(Clone)]
 pub enum ViewerBody {
-    // Boxed: the two differ several-fold in size.
-    Template(Box<BodyModel>),
+    // Behind pointers: the two differ several-fold in size; a template is shared with the
+    // reconstruction workers.
+    Template(Arc<BodyModel>),
     Ehm(Box<EhmModel>),
 }
 
