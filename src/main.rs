@@ -365,6 +365,20 @@ fn print_fit(f: &guava::fit::FitReport) {
         ),
         None => println!("  hands: none found"),
     }
+    if let Some(g) = &f.gaze {
+        let turns: Vec<String> = g
+            .turn_rad
+            .iter()
+            .map(|t| format!("{:.2}", t.to_degrees()))
+            .collect();
+        println!(
+            "  gaze: {} irises, {:.1} px RMS (eyes ahead: {:.1} px); eyes turned {}°",
+            g.observed.len(),
+            g.rms_px,
+            g.rms_before_px,
+            turns.join(" / ")
+        );
+    }
 }
 
 fn reconstruct(
@@ -589,7 +603,11 @@ fn write_fit_overlay(
         .hands
         .iter()
         .flat_map(|h| h.observed.iter().zip(&h.fitted));
-    for (&seen, &fitted) in face.chain(hands) {
+    let irises = report
+        .gaze
+        .iter()
+        .flat_map(|g| g.observed.iter().zip(&g.fitted));
+    for (&seen, &fitted) in face.chain(hands).chain(irises) {
         dot(seen, 1.5, green, false);
         dot(fitted, 1.0, red, false);
     }

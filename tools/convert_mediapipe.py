@@ -28,8 +28,17 @@ keep the committed model files unless the conversion itself changes):
 - tests/data/hand_landmark_fixture.json and tests/data/demo_hand_224.png: a crop of the demo
   portrait where her right hand would be (the portrait shows no hand: the numbers check the
   conversion, the low presence what the model says of a crop without a hand) and TFLite's output.
+- assets/models/iris_landmark.onnx: MediaPipe `iris_landmark.tflite` (Apache-2.0, same wheel),
+  opset 17. Input [1,64,64,3] RGB in [0, 1] (a square around one eye, 2.3× the corner-to-corner
+  extent, eye corners level; trained on the subject's right eye, so the left eye's crop is
+  mirrored); outputs 71×3 eye-contour and brow points and 5×3 iris points (centre first), in
+  input pixels.
+- tests/data/iris_landmark_fixture.json, tests/data/demo_eye_right_64.png and
+  demo_eye_left_64.png: both eyes of the demo portrait in fixed boxes (the left one mirrored) and
+  TFLite's output for each.
 Each converted model is checked against the TFLite interpreter on the real photo (not only random
-input) before anything is written.
+input) before anything is written. `--models iris` (a comma-separated subset of pose, face,
+hand, iris) converts only those; the pose model's run also writes the demo portrait.
 """
 import argparse
 import hashlib
@@ -49,7 +58,9 @@ SKIMAGE_ASTRONAUT_SHA256 = "88431cd9653ccd539741b555fb0a46b61558b301d4110412b5bc
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--skimage-wheel", required=True)
+    ap.add_argument("--models", default="pose,face,hand,iris")
     args = ap.parse_args()
+    wanted = set(args.models.split(","))
 
     import mediapipe
     import onnxruntime as ort
@@ -69,11 +80,23 @@ def main():
 
     models = os.path.join(ROOT, "assets/models")
     os.makedirs(models, exist_ok=True)
+    image = Image.open(__import__("io").BytesIO(portrait)).convert("RGB")
+    if "pose" in wanted:
+        pose(tf, ort, image, portrait, tflite, models)
+    if "face" in wanted:
+        face(tf, ort, image, os.path.join(modules, "face_landmark/face_landmark.tflite"), models)
+    if "hand" in wanted:
+        hand(tf, ort, image, os.path.join(modules, "hand_landmark/hand_landmark_full.tflite"), models)
+    if "iris" in wanted:
+        iris(tf, ort, image, os.path.join(modules, "iris_landmark/iris_landmark.tflite"), models)
+
+
+def pose(tf, ort, image, portrait, tflite, models):
+    from PIL import Image
     onnx_path = os.path.join(models, "pose_landmark_full.onnx")
     onnx_bytes = to_onnx(tflite)
 
     # The model's input for the portrait: centred square (it is square), 256², [0, 1].
-    image = Image.open(__import__("io").BytesIO(portrait)).convert("RGB")
     side = min(image.size)
     left, top = (image.width - side) // 2, (image.height - side) // 2
     small = image.crop((left, top, left + side, top + side)).resize((256, 256), Image.BILINEAR)
@@ -104,8 +127,48 @@ def main():
     }
     json.dump(fixture, open(os.path.join(ROOT, "tests/data/pose_landmark_fixture.json"), "w"), indent=1)
     print(f"wrote {onnx_path} ({len(onnx_bytes) / 1e6:.1f} MB), assets/demo_portrait.png, the fixture")
-    face(tf, ort, image, os.path.join(modules, "face_landmark/face_landmark.tflite"), models)
-    hand(tf, ort, image, os.path.join(modules, "hand_landmark/hand_landmark_full.tflite"), models)
+
+
+# The demo portrait's eyes (subject's right, then left): squares 2.3× the corner-to-corner
+# extent around the corners' midpoint (MediaPipe's iris crop), from face-mesh points 33/133 and
+# 362/263 of the face fixture, rounded; the boxes are fixed here, not our crop code.
+EYE_BOXES = {"right": (180, 79, 226, 125), "left": (224, 81, 271, 128)}
+
+
+def iris(tf, ort, image, tflite, models):
+    from PIL import Image
+    onnx_bytes = to_onnx(tflite)
+    session = ort.InferenceSession(onnx_bytes)
+    fixture = {
+        "source": "TFLite interpreter on tests/data/demo_eye_{right,left}_64.png / 255 (the demo "
+                  "portrait's boxes resized by Pillow, bilinear; the left eye's mirrored)",
+        "model": "mediapipe 0.10.21 modules/iris_landmark/iris_landmark.tflite",
+    }
+    for side, box in EYE_BOXES.items():
+        crop = image.crop(box).resize((64, 64), Image.BILINEAR)
+        if side == "left":
+            crop = crop.transpose(Image.FLIP_LEFT_RIGHT)
+        x = np.asarray(crop, np.float32)[None] / 255.0
+        outputs = run_tflite(tf, tflite, x)
+        got = dict(zip([o.name for o in session.get_outputs()],
+                       session.run(None, {session.get_inputs()[0].name: x})))
+        contour = next(v for v in outputs.values() if v.size == 213)
+        iris_points = next(v for v in outputs.values() if v.size == 15)
+        worst = max(np.abs(next(v for v in got.values() if v.size == n) - ref).max()
+                    for n, ref in [(213, contour), (15, iris_points)])
+        if worst > 0.01:
+            sys.exit(f"iris ({side} eye): ONNX and TFLite differ by {worst} px")
+        print(f"iris ({side} eye): ONNX vs TFLite within {worst:.2e} px, centre {iris_points.ravel()[:2]}")
+        crop.save(os.path.join(ROOT, f"tests/data/demo_eye_{side}_64.png"))
+        fixture[side] = {
+            "box": list(box),
+            "contour": [round(float(v), 3) for v in contour.ravel()],
+            "iris": [round(float(v), 3) for v in iris_points.ravel()],
+        }
+    path = os.path.join(models, "iris_landmark.onnx")
+    open(path, "wb").write(onnx_bytes)
+    json.dump(fixture, open(os.path.join(ROOT, "tests/data/iris_landmark_fixture.json"), "w"))
+    print(f"wrote {path} ({len(onnx_bytes) / 1e6:.1f} MB) and the iris fixture")
 
 
 # Her right hand's side of the demo portrait (it is out of frame): the suit's cuff and glove area.

@@ -119,6 +119,7 @@ fn fit_demo_portrait(body: &BodyModel, iterations: usize) -> anyhow::Result<()> 
             keypoints: &found.pose.keypoints,
             face,
             hands: &found.hands,
+            irises: &found.irises,
         };
         let (_, report) = fit_keypoints(body, &input, source.size)?;
         if i > 0 {

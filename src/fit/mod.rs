@@ -8,17 +8,22 @@
 //! **Face**, when the face model found a face: head and neck, the [`FITTED_EXPRESSIONS`], the
 //! head's size ([`HEAD_SIZE`]) and a small image offset per facial feature, against the face
 //! mesh's points on the body ([`FaceEmbedding`]), the body keypoints kept in. **Hands**, for each
-//! hand found: forearm, wrist and fingers against its 21 points ([`hand_targets`]). Residuals are
+//! hand found: forearm, wrist and fingers against its 21 points ([`hand_targets`]). **Gaze**, after
+//! the face stage, for each iris found: the eye joint against the iris centre (the body's pupil
+//! moved by its eye's feature offset, so the gaze is the iris's place within the eye, not the
+//! eye's place in the face). Residuals are
 //! reprojection errors in pixels, weighted by √confidence; priors pull joints to rest at
 //! [`PRIOR_PX_PER_RAD`] pixels per radian, shape to the default at [`SHAPE_PRIOR_PX`],
 //! expressions to neutral at [`EXPRESSION_PRIOR_PER_EYE_SPAN`] per unit and fingers to rest in
 //! proportion to the palm, so what no keypoint constrains stays put.
 
 mod face;
+mod gaze;
 mod hand;
 mod lm;
 
 pub use face::{FACE_FEATURES, FACE_FIT_POINTS, FaceEmbedding, embed_face};
+pub use gaze::{eye_joint, pupil};
 pub use hand::{BodyPoint, hand_targets};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -26,7 +31,8 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use crate::body::{BodyModel, BodyPose, HEAD_SIZE, Landmark, PointPoser, TargetGroup};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
 use crate::keypoints::{
-    Detections, FACE_EYE_CORNERS, FaceLandmarker, FaceLandmarks, HandLandmarks, Keypoint,
+    Detections, FACE_EYE_CORNERS, FaceLandmarker, FaceLandmarks, HandLandmarks, Iris, Keypoint,
+    Side,
 };
 use crate::reconstruct::SourceView;
 
@@ -101,6 +107,10 @@ const HAND_POINT_WEIGHT: f64 = 0.5;
 const FINGER_PRIOR_PER_PALM: f64 = 0.1;
 /// The face mesh's ~100 points are not independent observations: each counts at this weight.
 const FACE_POINT_WEIGHT: f64 = 0.5;
+/// An eye turned by 1 rad costs as much as an iris centre off by this fraction of the face's
+/// outer-eye-corner distance: weak beside what the iris shows (an eyeball's radius is about an
+/// eighth of that distance per radian), so the gaze follows the iris.
+const GAZE_PRIOR_PER_EYE_SPAN: f64 = 0.02;
 const ITERATIONS: usize = 30;
 /// Starting depths of the body stage, as factors of the shoulder-width estimate.
 const BODY_START_DEPTHS: [f32; 3] = [0.85, 1.0, 1.2];
@@ -129,6 +139,26 @@ pub struct FitReport {
     pub face_skipped: Option<String>,
     /// The hand stage, when the hand model found a hand.
     pub hands: Option<HandFitReport>,
+    /// The gaze stage, when the face stage ran and the iris model found irises.
+    pub gaze: Option<GazeFitReport>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct GazeFitReport {
+    /// Which eye each entry is, in the order of every list here.
+    pub sides: Vec<Side>,
+    /// Root-mean-square error of the iris centres before and after the gaze stage, with the eyes'
+    /// feature offsets.
+    pub rms_before_px: f32,
+    pub rms_px: f32,
+    /// Each iris centre as the model found it, and where the fitted body's pupil is (source
+    /// pixels, without the offsets).
+    pub observed: Vec<Vec2>,
+    pub fitted: Vec<Vec2>,
+    /// The pupils on the body, to re-project them when the pose is adjusted.
+    pub pupils: Vec<Landmark>,
+    /// Each eye's turn from rest (radians).
+    pub turn_rad: Vec<f32>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -361,6 +391,7 @@ pub fn fit_detections(
         keypoints: &detections.pose.keypoints,
         face,
         hands: &detections.hands,
+        irises: &detections.irises,
     };
     let (view, mut report) = fit_keypoints(body, &input, side)?;
     report.face_skipped = embedding.err();
@@ -373,6 +404,8 @@ pub struct FitInput<'a> {
     /// The face mesh with the body's embedding of it.
     pub face: Option<(&'a FaceLandmarks, &'a FaceEmbedding)>,
     pub hands: &'a [HandLandmarks],
+    /// Irises in the face's eyes; used only with the face.
+    pub irises: &'a [Iris],
 }
 
 impl<'a> FitInput<'a> {
@@ -382,6 +415,7 @@ impl<'a> FitInput<'a> {
             keypoints,
             face: None,
             hands: &[],
+            irises: &[],
         }
     }
 }
@@ -454,7 +488,20 @@ pub fn fit_keypoints(
         BodyPoint::Surface(l) => Some(l),
         BodyPoint::Joint(_) => None,
     });
-    let mut poser = PointPoser::new(body, body.landmarks.iter().chain(face_points).chain(tips));
+    let irises = if face.is_some() { input.irises } else { &[] };
+    let pupils = irises
+        .iter()
+        .map(|i| gaze::pupil(body, i.side))
+        .collect::<Result<Vec<_>, _>>()?;
+    let first_pupil = body.landmarks.len() + face_points.len() + tips.clone().count();
+    let mut poser = PointPoser::new(
+        body,
+        body.landmarks
+            .iter()
+            .chain(face_points)
+            .chain(tips)
+            .chain(&pupils),
+    );
 
     let mut unknowns: Vec<(Unknown, f64)> = (0..3)
         .map(|k| (Unknown::Joint(0, k), ROOT_PRIOR_PX_PER_RAD))
@@ -574,6 +621,60 @@ pub fn fit_keypoints(
         result = with_face;
     }
 
+    let mut gaze_report = None;
+    if let (Some((landmarks, _)), false) = (face, irises.is_empty()) {
+        // The irises alone: the body's eye keypoints sit on the eyeballs and would turn with
+        // them, while the pose model marks where the eye is, not where it looks.
+        let others = (
+            std::mem::take(&mut stage.observations),
+            std::mem::take(&mut stage.features),
+        );
+        let eye_span =
+            landmarks.points[FACE_EYE_CORNERS.0].distance(landmarks.points[FACE_EYE_CORNERS.1]);
+        let mut unknowns = Vec::new();
+        let mut eyes = Vec::new();
+        for (k, iris) in irises.iter().enumerate() {
+            stage.observations.push((
+                Target::Point(first_pupil + k),
+                iris.centre,
+                FACE_POINT_WEIGHT,
+            ));
+            let feature = FACE_FEATURES
+                .iter()
+                .position(|(name, _)| *name == gaze::eye_feature(iris.side));
+            stage.features.push(feature);
+            let j = joint(gaze::eye_joint(iris.side))?;
+            eyes.push(j);
+            let prior = GAZE_PRIOR_PER_EYE_SPAN * eye_span as f64;
+            // Up-down and left-right (the rest frames are world-aligned and the body faces +z);
+            // the turn about the line of sight moves no pupil.
+            unknowns.extend((0..2).map(|k| (Unknown::Joint(j, k), prior)));
+        }
+        stage.unknowns = unknowns;
+        stage.antagonists.clear();
+        stage.base = result.clone();
+        let range = 0..stage.observations.len();
+        let rms_before_px = stage.rms(&result, range.clone());
+        let (with_gaze, gaze_iterations, _) = stage.solve(camera_step);
+        iterations += gaze_iterations;
+        let mut body_only = with_gaze.clone();
+        body_only.feature_offsets = Default::default();
+        gaze_report = Some(GazeFitReport {
+            sides: irises.iter().map(|i| i.side).collect(),
+            rms_before_px,
+            rms_px: stage.rms(&with_gaze, range.clone()),
+            observed: irises.iter().map(|i| i.centre).collect(),
+            fitted: stage.projected(&body_only, range),
+            pupils: pupils.clone(),
+            turn_rad: eyes
+                .iter()
+                .map(|&j| with_gaze.pose.rotations[j].length())
+                .collect(),
+        });
+        (stage.observations, stage.features) = others;
+        result = with_gaze;
+    }
+
     let mut hands_report = None;
     if !input.hands.is_empty() {
         let start = stage.observations.len();
@@ -625,6 +726,7 @@ pub fn fit_keypoints(
         face: face_report,
         face_skipped: None,
         hands: hands_report,
+        gaze: gaze_report,
     };
     Ok((
         SourceView {

@@ -2,10 +2,11 @@
 //! `tools/convert_mediapipe.py`) through ONNX Runtime, as MediaPipe's holistic pipeline chains
 //! them: the pose model on the whole square photo gives the body points and a person mask; the
 //! face and hand models then see crops placed by the pose model's face and hand points, and
-//! second crops placed by their own first answers.
+//! second crops placed by their own first answers; the iris model sees each eye of the face mesh.
 
 mod face;
 mod hand;
+mod iris;
 mod model;
 mod pose;
 mod roi;
@@ -14,6 +15,7 @@ pub use face::{
     FACE_EYE_CORNERS, FACE_INPUT, FACE_MODEL_PATH, FACE_POINTS, FaceLandmarker, FaceLandmarks,
 };
 pub use hand::{HAND_INPUT, HAND_MODEL_PATH, HAND_POINTS, HandLandmarker, HandLandmarks, Side};
+pub use iris::{IRIS_INPUT, IRIS_MODEL_PATH, Iris, IrisLandmarker};
 pub use pose::{COCO_FROM_MEDIAPIPE, POSE_INPUT, POSE_MODEL_PATH, PoseKeypoints, PoseLandmarker};
 pub use roi::Roi;
 
@@ -42,14 +44,17 @@ pub struct Detections {
     pub face: Option<FaceLandmarks>,
     /// The hands the hand model found where the pose model put wrists (0, 1 or 2).
     pub hands: Vec<HandLandmarks>,
+    /// The irises in the face mesh's eyes (none without a face).
+    pub irises: Vec<Iris>,
 }
 
 /// Where the shipped models are, and the file names [`Landmarkers::load_dir`] looks for.
 pub const MODELS_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/models");
-pub const MODEL_FILES: [&str; 3] = [
+pub const MODEL_FILES: [&str; 4] = [
     "pose_landmark_full.onnx",
     "face_landmark.onnx",
     "hand_landmark_full.onnx",
+    "iris_landmark.onnx",
 ];
 
 /// The keypoint models, loaded once and run on each photo.
@@ -57,6 +62,7 @@ pub struct Landmarkers {
     pub pose: PoseLandmarker,
     pub face: FaceLandmarker,
     pub hand: HandLandmarker,
+    pub iris: IrisLandmarker,
 }
 
 impl Landmarkers {
@@ -80,15 +86,17 @@ impl Landmarkers {
                 reason: format!("the keypoint model folder lacks {}", missing.join(", ")),
             });
         }
-        let [pose, face, hand] = MODEL_FILES.map(|f| dir.join(f));
+        let [pose, face, hand, iris] = MODEL_FILES.map(|f| dir.join(f));
         Ok(Self {
             pose: PoseLandmarker::load_from(runtime, &pose)?,
             face: FaceLandmarker::load_from(runtime, &face)?,
             hand: HandLandmarker::load_from(runtime, &hand)?,
+            iris: IrisLandmarker::load_from(runtime, &iris)?,
         })
     }
 
-    /// The pose model on the photo, then the face and hand models where it puts them.
+    /// The pose model on the photo, then the face and hand models where it puts them, and the
+    /// iris model in the face's eyes.
     pub fn detect(&mut self, source: &SourceImage) -> Result<Detections, OnnxError> {
         let pose = self.pose.detect(source)?;
         let face = match Roi::face_from_pose(&pose.keypoints) {
@@ -99,7 +107,16 @@ impl Landmarkers {
         for side in [Side::Left, Side::Right] {
             hands.extend(self.hand.detect(source, &pose, side)?);
         }
-        Ok(Detections { pose, face, hands })
+        let irises = match &face {
+            Some(face) => self.iris.detect(source, face)?,
+            None => Vec::new(),
+        };
+        Ok(Detections {
+            pose,
+            face,
+            hands,
+            irises,
+        })
     }
 }
 

@@ -76,6 +76,18 @@ impl Roi {
         })
     }
 
+    /// An eye's crop as MediaPipe's iris graph places it: at the midpoint of the eye's corners
+    /// `a` and `b` (image-left one first), turned along a → b, `scale` times their longer
+    /// extent in the image.
+    pub fn eye(a: Vec2, b: Vec2, scale: f32) -> Self {
+        let d = b - a;
+        Self {
+            centre: 0.5 * (a + b),
+            side: scale * d.x.abs().max(d.y.abs()),
+            angle: d.y.atan2(d.x),
+        }
+    }
+
     /// The face crop around a face mesh (MediaPipe's landmarks-to-ROI): eye corners level, the
     /// points' bounding box in that frame, its longer side times the margin.
     pub fn face_from_landmarks(points: &[Vec2]) -> Self {

@@ -329,6 +329,7 @@ pub fn reconstruct_photo_file(
                 pose,
                 face: None,
                 hands: Vec::new(),
+                irises: Vec::new(),
             })
         };
         keypoints = Some(found.map_err(|e| ReconstructError::Keypoints(e.to_string()))?);

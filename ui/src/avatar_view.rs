@@ -222,7 +222,15 @@ impl SourcePreview {
             .iter()
             .filter_map(|f| f.hands.as_ref())
             .flat_map(|h| h.observed.iter().copied().zip(h.targets.iter().cloned()));
-        let detail = face.chain(hands).collect();
+        let irises = report
+            .fit
+            .iter()
+            .filter_map(|f| f.gaze.as_ref())
+            .flat_map(|g| {
+                let pupils = g.pupils.iter().cloned().map(BodyPoint::Surface);
+                g.observed.iter().copied().zip(pupils)
+            });
+        let detail = face.chain(hands).chain(irises).collect();
         let mut preview = Self {
             photo_image: Photo::load(photo)?,
             photo: photo.to_path_buf(),

@@ -1,0 +1,123 @@
+//! Iris centres from MediaPipe's iris landmark model (`iris_landmark`): a 64² crop around one eye
+//! (RGB in [0, 1], NHWC) in; 71 eye-contour and brow points and 5 iris points (the centre, then
+//! four on the rim) in input pixels out. The crop is placed as MediaPipe's iris graph places it,
+//! by the face mesh's two corners of that eye. The model knows only the subject's right eye (on
+//! the image's left), so the left eye's crop is mirrored in and its points mirrored back.
+
+use std::path::Path;
+
+use glam::Vec2;
+
+use super::model::SquareModel;
+use super::{FaceLandmarks, Roi, Side};
+use crate::onnx::{OnnxError, OnnxRuntime};
+use crate::reconstruct::SourceImage;
+
+pub const IRIS_MODEL_PATH: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/assets/models/iris_landmark.onnx"
+);
+pub const IRIS_INPUT: usize = 64;
+const CONTOUR_POINTS: usize = 71;
+const IRIS_POINTS: usize = 5;
+/// MediaPipe's crop: 2.3× the eye corners' longer extent (`IrisLandmarkLandmarksToRoi`).
+const EYE_CROP_SCALE: f32 = 2.3;
+/// Face-mesh corners of each eye, image-left corner first (upright): the subject's right eye
+/// from its outer to inner corner, the left from inner to outer.
+const EYE_CORNERS: [(Side, [usize; 2]); 2] = [(Side::Right, [33, 133]), (Side::Left, [362, 263])];
+
+/// One eye's iris found on a photo.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Iris {
+    pub side: Side,
+    /// The iris centre in the source's pixel-edge coordinates.
+    pub centre: Vec2,
+    /// Its mean radius in source pixels (centre to the four rim points).
+    pub radius: f32,
+    /// The crop the points came from.
+    pub roi: Roi,
+}
+
+/// Model output points in input pixels (x, y, relative depth).
+pub type Points = Vec<[f32; 3]>;
+
+pub struct IrisLandmarker {
+    model: SquareModel,
+}
+
+impl IrisLandmarker {
+    pub fn load(runtime: &OnnxRuntime) -> Result<Self, OnnxError> {
+        Self::load_from(runtime, Path::new(IRIS_MODEL_PATH))
+    }
+
+    pub fn load_from(runtime: &OnnxRuntime, path: &Path) -> Result<Self, OnnxError> {
+        let what = "MediaPipe's iris landmark model";
+        Ok(Self {
+            model: SquareModel::load(runtime, path, what, 2, IRIS_INPUT)?,
+        })
+    }
+
+    /// Runs the model on a 64² RGB input in [0, 1] showing a right eye: the 71 contour points
+    /// and the 5 iris points, in input pixels.
+    pub fn run(&mut self, input: &[f32]) -> Result<(Points, Points), OnnxError> {
+        let outputs = self.model.run(input)?;
+        let rows = |v: &[f32]| v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let contour = rows(
+            self.model
+                .output(&outputs, CONTOUR_POINTS * 3, "eye contour")?,
+        );
+        let iris = rows(self.model.output(&outputs, IRIS_POINTS * 3, "iris")?);
+        Ok((contour, iris))
+    }
+
+    /// Both irises in the eyes of a face mesh found on `source`.
+    pub fn detect(
+        &mut self,
+        source: &SourceImage,
+        face: &FaceLandmarks,
+    ) -> Result<Vec<Iris>, OnnxError> {
+        EYE_CORNERS
+            .iter()
+            .map(|&(side, [a, b])| {
+                let roi = Roi::eye(face.points[a], face.points[b], EYE_CROP_SCALE);
+                let mirrored = side == Side::Left;
+                let mut input = roi.sample(source, IRIS_INPUT);
+                if mirrored {
+                    mirror_rows(&mut input, IRIS_INPUT);
+                }
+                let (_, iris) = self.run(&input)?;
+                let to_image = |p: &[f32; 3]| {
+                    let x = if mirrored {
+                        IRIS_INPUT as f32 - p[0]
+                    } else {
+                        p[0]
+                    };
+                    roi.to_image(Vec2::new(x, p[1]), IRIS_INPUT)
+                };
+                let centre = to_image(&iris[0]);
+                let radius = iris[1..]
+                    .iter()
+                    .map(|p| to_image(p).distance(centre))
+                    .sum::<f32>()
+                    / (IRIS_POINTS - 1) as f32;
+                Ok(Iris {
+                    side,
+                    centre,
+                    radius,
+                    roi,
+                })
+            })
+            .collect()
+    }
+}
+
+/// Mirrors an `n`² interleaved RGB image left to right.
+fn mirror_rows(rgb: &mut [f32], n: usize) {
+    for row in rgb.chunks_exact_mut(3 * n) {
+        for x in 0..n / 2 {
+            for c in 0..3 {
+                row.swap(3 * x + c, 3 * (n - 1 - x) + c);
+            }
+        }
+    }
+}
