@@ -137,7 +137,7 @@ fn fit_demo_portrait(body: &BodyModel, iterations: usize) -> anyhow::Result<()> 
         median(fit_ms.clone())
     );
     println!(
-        "  ({} body keypoints, {:.1} px RMS; {}; {} hands; {} iterations)",
+        "  ({} body keypoints, {:.1} px RMS; {}; {} irises; {} hands; {} iterations)",
         report.keypoints_used,
         report.rms_px,
         report.face.as_ref().map_or_else(
@@ -147,6 +147,7 @@ fn fit_demo_portrait(body: &BodyModel, iterations: usize) -> anyhow::Result<()> 
             ),
             |f| format!("{} face points, {:.1} px RMS", f.points_used, f.rms_px)
         ),
+        report.gaze.as_ref().map_or(0, |g| g.observed.len()),
         report.hands.as_ref().map_or(0, |h| h.hands),
         report.iterations
     );

@@ -2,7 +2,6 @@
 //! model found. The pupil is the front of the eyeball's iris part (its vertex furthest forward in
 //! the rest pose, where the body faces +z), which turns with the eye joint.
 
-use super::FitError;
 use crate::body::{BodyModel, Landmark};
 use crate::keypoints::Side;
 
@@ -22,17 +21,17 @@ pub fn eye_feature(side: Side) -> &'static str {
     }
 }
 
-/// The pupil of the `side` eye: the iris part's vertex furthest forward at rest.
-pub fn pupil(body: &BodyModel, side: Side) -> Result<Landmark, FitError> {
+/// The pupil of the `side` eye: the vertex furthest forward at rest of the part `eye_front.L` or
+/// `.R` (the default body's iris and cornea); `None` for a body without that part.
+pub fn pupil(body: &BodyModel, side: Side) -> Option<Landmark> {
     let part = match side {
         Side::Left => "eye_front.L",
         Side::Right => "eye_front.R",
     };
     let front = (0..body.vertices.len())
         .filter(|&v| body.part_of(v) == Some(part))
-        .max_by(|&a, &b| body.vertices[a].z.total_cmp(&body.vertices[b].z))
-        .ok_or_else(|| FitError::MissingOnBody(part.into()))?;
-    Ok(Landmark {
+        .max_by(|&a, &b| body.vertices[a].z.total_cmp(&body.vertices[b].z))?;
+    Some(Landmark {
         name: format!(
             "pupil_{}",
             if side == Side::Left { "left" } else { "right" }

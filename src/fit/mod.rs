@@ -139,7 +139,8 @@ pub struct FitReport {
     pub face_skipped: Option<String>,
     /// The hand stage, when the hand model found a hand.
     pub hands: Option<HandFitReport>,
-    /// The gaze stage, when the face stage ran and the iris model found irises.
+    /// The gaze stage, when the face stage ran, the iris model found irises and the body has
+    /// eye joints and eyeballs with an iris part ([`pupil`]).
     pub gaze: Option<GazeFitReport>,
 }
 
@@ -488,11 +489,19 @@ pub fn fit_keypoints(
         BodyPoint::Surface(l) => Some(l),
         BodyPoint::Joint(_) => None,
     });
-    let irises = if face.is_some() { input.irises } else { &[] };
-    let pupils = irises
-        .iter()
-        .map(|i| gaze::pupil(body, i.side))
-        .collect::<Result<Vec<_>, _>>()?;
+    // Each iris with its pupil and eye joint; a body without them does not fit the gaze.
+    let irises: Vec<(&Iris, Landmark, usize)> = match face {
+        Some(_) => input
+            .irises
+            .iter()
+            .filter_map(|i| {
+                let joint = body.joint_index(gaze::eye_joint(i.side))?;
+                Some((i, gaze::pupil(body, i.side)?, joint))
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    let pupils: Vec<Landmark> = irises.iter().map(|(_, p, _)| p.clone()).collect();
     let first_pupil = body.landmarks.len() + face_points.len() + tips.clone().count();
     let mut poser = PointPoser::new(
         body,
@@ -632,8 +641,7 @@ pub fn fit_keypoints(
         let eye_span =
             landmarks.points[FACE_EYE_CORNERS.0].distance(landmarks.points[FACE_EYE_CORNERS.1]);
         let mut unknowns = Vec::new();
-        let mut eyes = Vec::new();
-        for (k, iris) in irises.iter().enumerate() {
+        for (k, &(iris, _, j)) in irises.iter().enumerate() {
             stage.observations.push((
                 Target::Point(first_pupil + k),
                 iris.centre,
@@ -643,8 +651,6 @@ pub fn fit_keypoints(
                 .iter()
                 .position(|(name, _)| *name == gaze::eye_feature(iris.side));
             stage.features.push(feature);
-            let j = joint(gaze::eye_joint(iris.side))?;
-            eyes.push(j);
             let prior = GAZE_PRIOR_PER_EYE_SPAN * eye_span as f64;
             // Up-down and left-right (the rest frames are world-aligned and the body faces +z);
             // the turn about the line of sight moves no pupil.
@@ -660,15 +666,15 @@ pub fn fit_keypoints(
         let mut body_only = with_gaze.clone();
         body_only.feature_offsets = Default::default();
         gaze_report = Some(GazeFitReport {
-            sides: irises.iter().map(|i| i.side).collect(),
+            sides: irises.iter().map(|(i, _, _)| i.side).collect(),
             rms_before_px,
             rms_px: stage.rms(&with_gaze, range.clone()),
-            observed: irises.iter().map(|i| i.centre).collect(),
+            observed: irises.iter().map(|(i, _, _)| i.centre).collect(),
             fitted: stage.projected(&body_only, range),
-            pupils: pupils.clone(),
-            turn_rad: eyes
+            pupils,
+            turn_rad: irises
                 .iter()
-                .map(|&j| with_gaze.pose.rotations[j].length())
+                .map(|&(_, _, j)| with_gaze.pose.rotations[j].length())
                 .collect(),
         });
         (stage.observations, stage.features) = others;

@@ -1337,6 +1337,9 @@ fn default_summary(r: &guava::reconstruct::Report) -> String {
             (None, Some(why)) => summary.push_str(&format!(", face not fitted ({why})")),
             (None, None) => {}
         }
+        if let Some(g) = &f.gaze {
+            summary.push_str(&format!(", gaze to {} irises", g.observed.len()));
+        }
         summary.push_str("; ");
     }
     summary.push_str(&format!(
