@@ -166,7 +166,9 @@ fn fit_writes_tracking_and_takes_a_model_folder() {
     let (ok, _, stderr) = guava(&fit);
     assert!(!ok && !out.exists());
     assert!(
-        stderr.contains("lacks pose_landmark_full.onnx, hand_landmark_full.onnx"),
+        stderr.contains(
+            "lacks pose_detection.onnx, pose_landmark_full.onnx, hand_landmark_full.onnx, iris_landmark.onnx"
+        ),
         "{stderr}"
     );
     for f in guava::keypoints::MODEL_FILES {

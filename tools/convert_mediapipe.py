@@ -36,9 +36,19 @@ keep the committed model files unless the conversion itself changes):
 - tests/data/iris_landmark_fixture.json, tests/data/demo_eye_right_64.png and
   demo_eye_left_64.png: both eyes of the demo portrait in fixed boxes (the left one mirrored) and
   TFLite's output for each.
+- assets/models/pose_detection.onnx: MediaPipe `pose_detection.tflite` (Apache-2.0, same wheel),
+  opset 17, after a pre-pass that stores each DENSIFY op's output (block-sparse weights) as a
+  dense constant, which tf2onnx cannot read otherwise. Input [1,224,224,3] RGB in [-1, 1] (the
+  photo letterboxed to 224²); outputs 2254×12 box and keypoint offsets per SSD anchor and 2254
+  score logits.
+- tests/data/pose_detection_fixture.json and tests/data/demo_portrait_224.png: the detector's
+  input for the demo portrait and TFLite's outputs at its five best anchors; and, for the demo
+  portrait and tests/data/camera.png (scikit-image's `camera.png`, CC0 by Lav Varshney, grey
+  made RGB), the 33 body landmarks MediaPipe's own pose pipeline (`mediapipe.solutions.pose`,
+  static images, the full model: detector, crop, landmarks) finds, in pixels.
 Each converted model is checked against the TFLite interpreter on the real photo (not only random
 input) before anything is written. `--models iris` (a comma-separated subset of pose, face,
-hand, iris) converts only those; the pose model's run also writes the demo portrait.
+hand, iris, detector) converts only those; the pose model's run also writes the demo portrait.
 """
 import argparse
 import hashlib
@@ -58,7 +68,7 @@ SKIMAGE_ASTRONAUT_SHA256 = "88431cd9653ccd539741b555fb0a46b61558b301d4110412b5bc
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--skimage-wheel", required=True)
-    ap.add_argument("--models", default="pose,face,hand,iris")
+    ap.add_argument("--models", default="pose,face,hand,iris,detector")
     args = ap.parse_args()
     wanted = set(args.models.split(","))
 
@@ -89,6 +99,94 @@ def main():
         hand(tf, ort, image, os.path.join(modules, "hand_landmark/hand_landmark_full.tflite"), models)
     if "iris" in wanted:
         iris(tf, ort, image, os.path.join(modules, "iris_landmark/iris_landmark.tflite"), models)
+    if "detector" in wanted:
+        with zipfile.ZipFile(args.skimage_wheel) as whl:
+            camera = Image.open(__import__("io").BytesIO(whl.read("skimage/data/camera.png")))
+        camera = camera.convert("RGB")
+        camera.save(os.path.join(ROOT, "tests/data/camera.png"))
+        detector(tf, ort, image, camera, os.path.join(modules, "pose_detection/pose_detection.tflite"), models)
+
+
+def densified(tf, tflite, out):
+    """`tflite` with each DENSIFY op's output stored as a constant and the op dropped."""
+    from tensorflow.lite.python import schema_py_generated as schema
+    from tensorflow.lite.tools import flatbuffer_utils
+    model = flatbuffer_utils.read_model(tflite)
+    graph = model.subgraphs[0]
+
+    def is_densify(op):
+        c = model.operatorCodes[op.opcodeIndex]
+        return max(c.builtinCode, c.deprecatedBuiltinCode) == schema.BuiltinOperator.DENSIFY
+
+    ops = [op for op in graph.operators if is_densify(op)]
+    # Without the default (XNNPACK) delegate, which would swallow the DENSIFY ops and leave their
+    # outputs zero.
+    interpreter = tf.lite.Interpreter(
+        tflite, experimental_preserve_all_tensors=True,
+        experimental_op_resolver_type=tf.lite.experimental.OpResolverType.BUILTIN_WITHOUT_DEFAULT_DELEGATES)
+    interpreter.allocate_tensors()
+    d = interpreter.get_input_details()[0]
+    interpreter.set_tensor(d["index"], np.zeros(d["shape"], np.float32))
+    interpreter.invoke()
+    for op in ops:
+        value = interpreter.get_tensor(op.outputs[0])
+        if not np.abs(value).max() > 0:
+            sys.exit(f"{tflite}: a DENSIFY output is all zero; the pre-pass went wrong")
+        buffer = schema.BufferT()
+        buffer.data = np.frombuffer(value.tobytes(), np.uint8)
+        model.buffers.append(buffer)
+        graph.tensors[op.outputs[0]].buffer = len(model.buffers) - 1
+        # The sparse input is read no more: without data and sparsity converters skip it.
+        graph.tensors[op.inputs[0]].buffer = 0
+        graph.tensors[op.inputs[0]].sparsity = None
+    graph.operators = [op for op in graph.operators if not is_densify(op)]
+    flatbuffer_utils.write_model(model, out)
+    print(f"detector: {len(ops)} DENSIFY ops stored as constants")
+
+
+def detector(tf, ort, portrait, camera, tflite, models):
+    import mediapipe
+    from PIL import Image
+    with tempfile.TemporaryDirectory() as tmp:
+        dense = os.path.join(tmp, "dense.tflite")
+        densified(tf, tflite, dense)
+        onnx_bytes = to_onnx(dense)
+    session = ort.InferenceSession(onnx_bytes)
+    fixture = {"model": "mediapipe 0.10.21 modules/pose_detection/pose_detection.tflite"}
+    for name, photo in [("demo_portrait", portrait), ("camera", camera)]:
+        small = photo.resize((224, 224), Image.BILINEAR)
+        x = np.asarray(small, np.float32)[None] / 127.5 - 1.0
+        outputs = run_tflite(tf, tflite, x)
+        got = dict(zip([o.name for o in session.get_outputs()],
+                       session.run(None, {session.get_inputs()[0].name: x})))
+        boxes = next(v for v in outputs.values() if v.size == 2254 * 12).reshape(2254, 12)
+        scores = next(v for v in outputs.values() if v.size == 2254).ravel()
+        worst = max(np.abs(got[k] - outputs[k]).max() for k in outputs)
+        # Box values run to ~200 input pixels; the densified weights are the sparse ones exactly.
+        if worst > 0.01:
+            sys.exit(f"detector ({name}): ONNX and TFLite differ by {worst}")
+        best = np.argsort(-scores)[:5]
+        print(f"detector ({name}): ONNX vs TFLite within {worst:.2e}; best score "
+              f"{1 / (1 + np.exp(-scores[best[0]])):.3f} at anchor {best[0]}")
+        with mediapipe.solutions.pose.Pose(static_image_mode=True, model_complexity=1) as pose:
+            found = pose.process(np.asarray(photo))
+        if found.pose_landmarks is None:
+            sys.exit(f"MediaPipe's pose pipeline finds no person on {name}")
+        entry = {
+            "pipeline": "mediapipe.solutions.pose.Pose(static_image_mode=True, model_complexity=1)",
+            "landmarks": [[round(l.x * photo.width, 2), round(l.y * photo.height, 2),
+                           round(l.visibility, 3)] for l in found.pose_landmarks.landmark],
+        }
+        if name == "demo_portrait":
+            small.save(os.path.join(ROOT, "tests/data/demo_portrait_224.png"))
+            entry["anchors"] = [int(i) for i in best]
+            entry["boxes"] = [[round(float(v), 3) for v in boxes[i]] for i in best]
+            entry["scores"] = [round(float(scores[i]), 4) for i in best]
+        fixture[name] = entry
+    path = os.path.join(models, "pose_detection.onnx")
+    open(path, "wb").write(onnx_bytes)
+    json.dump(fixture, open(os.path.join(ROOT, "tests/data/pose_detection_fixture.json"), "w"))
+    print(f"wrote {path} ({len(onnx_bytes) / 1e6:.1f} MB) and the detector fixture")
 
 
 def pose(tf, ort, image, portrait, tflite, models):

@@ -234,8 +234,7 @@ pub fn reconstruct_guava_file(
                     "has no alpha channel and the pose model (for its person mask) did not load"
                         .into(),
             })?
-            .pose
-            .detect(&image)
+            .pose(&image)
             .map_err(|e| ReconstructError::Keypoints(e.to_string()))?;
         image.apply_mask(pose.mask_at(image.size as usize));
     }

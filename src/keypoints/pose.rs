@@ -1,17 +1,17 @@
 //! 2D body keypoints and a person mask from MediaPipe's pose landmark model (`pose_landmark_full`).
 //!
-//! The model sees the photo's centred square crop at 256² (RGB in [0, 1], NHWC, as MediaPipe
-//! feeds it) and returns 39 landmarks (33 body points and 6 auxiliary) in input pixels with
-//! visibility and presence logits, a pose presence score and 256² segmentation logits. No pose
-//! detector runs first: the crop is the whole centred square, which suits an upper-body portrait
-//! that fills the frame (MediaPipe's own pipeline crops around a detected person).
+//! The model sees a crop of the photo at 256² (RGB in [0, 1], NHWC, as MediaPipe feeds it):
+//! the one the pose detector places around the person ([`super::PoseDetector`]), or, when it
+//! finds nobody, the whole photo. It returns 39 landmarks (33 body points and 6 auxiliary) in
+//! input pixels with visibility and presence logits, a pose presence score and 256² segmentation
+//! logits, all in the crop's frame.
 
 use std::path::Path;
 
 use glam::Vec2;
 
 use super::model::SquareModel;
-use super::{Keypoint, sigmoid};
+use super::{Keypoint, Roi, sigmoid};
 use crate::onnx::{OnnxError, OnnxRuntime};
 use crate::reconstruct::SourceImage;
 use crate::reconstruct::fill::bilinear_clamped;
@@ -24,6 +24,8 @@ pub const POSE_MODEL_PATH: &str = concat!(
 /// The model's input side.
 pub const POSE_INPUT: usize = 256;
 const LANDMARKS: usize = 39;
+/// The body landmarks among them (the rest are auxiliary).
+const BODY_LANDMARKS: usize = 33;
 
 /// The COCO body keypoints by the default body's landmark names, with their MediaPipe index.
 pub const COCO_FROM_MEDIAPIPE: [(&str, usize); 17] = [
@@ -52,8 +54,11 @@ pub struct PoseKeypoints {
     pub presence: f32,
     /// The raw landmark rows (x, y, z in input pixels, visibility and presence logits).
     pub landmarks: Vec<[f32; 5]>,
-    /// Source pixels per input pixel.
-    pub scale: f32,
+    /// Each landmark's x, y refined by the model's heatmap, as MediaPipe refines them
+    /// ([`refine_from_heatmap`]), in input pixels.
+    pub refined: Vec<Vec2>,
+    /// The crop the model saw.
+    pub roi: Roi,
     pub keypoints: Vec<Keypoint>,
     /// Person probability per pixel of the 256² input, row-major.
     pub mask: Vec<f32>,
@@ -64,19 +69,27 @@ impl PoseKeypoints {
     pub fn point(&self, i: usize) -> (Vec2, f32) {
         let l = self.landmarks[i];
         (
-            Vec2::new(l[0], l[1]) * self.scale,
+            self.roi.to_image(self.refined[i], POSE_INPUT),
             sigmoid(l[3]) * sigmoid(l[4]),
         )
     }
 
-    /// The mask resized (bilinear) to `side`² for a source image of that size.
+    /// How much of the body the model sees: the sum of its 33 body landmarks' confidences.
+    pub fn seen(&self) -> f32 {
+        (0..BODY_LANDMARKS).map(|i| self.point(i).1).sum()
+    }
+
+    /// The mask (bilinear) over a `side`² source image; outside the crop nobody.
     pub fn mask_at(&self, side: usize) -> Vec<f32> {
-        let scale = POSE_INPUT as f32 / side as f32;
-        let centre = |i: usize| (i as f32 + 0.5) * scale - 0.5;
+        let n = POSE_INPUT as f32;
         (0..side * side)
             .map(|i| {
-                let (x, y) = (centre(i % side), centre(i / side));
-                bilinear_clamped(POSE_INPUT, x, y, |k| self.mask[k])
+                let pixel = Vec2::new((i % side) as f32 + 0.5, (i / side) as f32 + 0.5);
+                let p = self.roi.to_input(pixel, POSE_INPUT);
+                if p.cmplt(Vec2::ZERO).any() || p.cmpgt(Vec2::splat(n)).any() {
+                    return 0.0;
+                }
+                bilinear_clamped(POSE_INPUT, p.x - 0.5, p.y - 0.5, |k| self.mask[k])
             })
             .collect()
     }
@@ -99,30 +112,43 @@ impl PoseLandmarker {
         })
     }
 
-    /// Runs the model on a source image (its RGB as loaded, before any mask is applied);
-    /// keypoints come in the source's pixels.
-    pub fn detect(&mut self, source: &SourceImage) -> Result<PoseKeypoints, OnnxError> {
-        let input = downsample_to_input(&source.rgb, source.size as usize);
-        self.run(&input, source.size as f32)
+    /// Runs the model on `roi` of a source image (its RGB as loaded, before any mask is
+    /// applied), or on the whole image without one; keypoints come in the source's pixels.
+    pub fn detect(
+        &mut self,
+        source: &SourceImage,
+        roi: Option<Roi>,
+    ) -> Result<PoseKeypoints, OnnxError> {
+        let side = source.size as f32;
+        let roi = roi.unwrap_or(Roi {
+            centre: Vec2::splat(side / 2.0),
+            side,
+            angle: 0.0,
+        });
+        self.run(&roi.sample(source, POSE_INPUT), roi)
     }
 
-    /// Runs the model on a 256² RGB input in [0, 1] (row-major, interleaved); keypoints are
-    /// scaled to an image of side `side` that shows the same square.
-    pub fn run(&mut self, input: &[f32], side: f32) -> Result<PoseKeypoints, OnnxError> {
+    /// Runs the model on a 256² RGB input in [0, 1] (row-major, interleaved) that shows `roi`
+    /// of a source image; keypoints come in the source's pixels.
+    pub fn run(&mut self, input: &[f32], roi: Roi) -> Result<PoseKeypoints, OnnxError> {
         let outputs = self.model.run(input)?;
         let raw = self.model.output(&outputs, LANDMARKS * 5, "landmark")?;
         let presence = self.model.output(&outputs, 1, "presence")?[0];
         let mask = self
             .model
             .output(&outputs, POSE_INPUT * POSE_INPUT, "segmentation")?;
+        let heatmap = self
+            .model
+            .output(&outputs, HEATMAP * HEATMAP * LANDMARKS, "heatmap")?;
         let landmarks: Vec<[f32; 5]> = raw
             .chunks_exact(5)
             .map(|c| [c[0], c[1], c[2], c[3], c[4]])
             .collect();
         let mut found = PoseKeypoints {
             presence,
+            refined: refine_from_heatmap(&landmarks, heatmap),
             landmarks,
-            scale: side / POSE_INPUT as f32,
+            roi,
             keypoints: Vec::new(),
             mask: mask.iter().map(|&x| sigmoid(x)).collect(),
         };
@@ -141,32 +167,42 @@ impl PoseLandmarker {
     }
 }
 
-/// A `side`² RGB image in [0, 1] (interleaved) as the model's 256² input: box-filtered when
-/// `side` is a multiple of 256 (the source images are 512²), else sampled bilinearly at the input
-/// pixels' centres (another side, such as GUAVA's 518², works, a little less smoothly).
-fn downsample_to_input(rgb: &[f32], side: usize) -> Vec<f32> {
-    let k = side / POSE_INPUT;
-    if k == 0 || k * POSE_INPUT != side {
-        let scale = side as f32 / POSE_INPUT as f32;
-        let centre = |i: usize| (i as f32 + 0.5) * scale - 0.5;
-        return (0..POSE_INPUT * POSE_INPUT * 3)
-            .map(|i| {
-                let (p, c) = (i / 3, i % 3);
-                let (x, y) = (centre(p % POSE_INPUT), centre(p / POSE_INPUT));
-                bilinear_clamped(side, x, y, |q| rgb[q * 3 + c])
-            })
-            .collect();
-    }
-    let mut out = vec![0.0; POSE_INPUT * POSE_INPUT * 3];
-    let norm = 1.0 / (k * k) as f32;
-    for y in 0..side {
-        for x in 0..side {
-            let o = ((y / k) * POSE_INPUT + x / k) * 3;
-            let i = (y * side + x) * 3;
-            for c in 0..3 {
-                out[o + c] += rgb[i + c] * norm;
+/// The heatmap's side (64², one channel per landmark, HWC, logits).
+const HEATMAP: usize = 64;
+/// MediaPipe's refinement window and the heatmap confidence it needs.
+const HEATMAP_KERNEL: usize = 7;
+const MIN_HEATMAP_CONFIDENCE: f32 = 0.5;
+
+/// Landmark positions refined as MediaPipe's `RefineLandmarksFromHeatmapCalculator` does: the
+/// confidence-weighted mean of the heatmap cells in a 7×7 window around the landmark's cell (cell
+/// indices, not centres, as there), kept when the window's best confidence reaches 0.5.
+fn refine_from_heatmap(landmarks: &[[f32; 5]], heatmap: &[f32]) -> Vec<Vec2> {
+    let to_cells = HEATMAP as f32 / POSE_INPUT as f32;
+    landmarks
+        .iter()
+        .enumerate()
+        .map(|(k, l)| {
+            let at = Vec2::new(l[0], l[1]);
+            let centre = (at * to_cells).floor();
+            if centre.cmplt(Vec2::ZERO).any() || centre.cmpge(Vec2::splat(HEATMAP as f32)).any() {
+                return at;
             }
-        }
-    }
-    out
+            let (cx, cy) = (centre.x as usize, centre.y as usize);
+            let r = HEATMAP_KERNEL / 2;
+            let (mut sum, mut weighted, mut best) = (0.0, Vec2::ZERO, 0.0f32);
+            for row in cy.saturating_sub(r)..(cy + r + 1).min(HEATMAP) {
+                for col in cx.saturating_sub(r)..(cx + r + 1).min(HEATMAP) {
+                    let c = sigmoid(heatmap[(row * HEATMAP + col) * LANDMARKS + k]);
+                    sum += c;
+                    best = best.max(c);
+                    weighted += c * Vec2::new(col as f32, row as f32);
+                }
+            }
+            if best >= MIN_HEATMAP_CONFIDENCE && sum > 0.0 {
+                weighted / sum / to_cells
+            } else {
+                at
+            }
+        })
+        .collect()
 }

@@ -13,6 +13,11 @@ use crate::reconstruct::fill::bilinear_clamped;
 const FACE_MARGIN: f32 = 1.5;
 /// The face mesh spans about 4.5 eye distances with that margin (forehead to chin ≈ 3).
 const FACE_SIDE_PER_EYE_DISTANCE: f32 = 4.5;
+/// ... and about twice the extent of the pose model's eyes, nose and ears (ear to ear ≈ 2.3 eye
+/// distances face on, ear to nose ≈ a face's width in profile).
+const FACE_SIDE_PER_EXTENT: f32 = 2.0;
+/// Eyes closer than this share of that extent: a head in profile.
+const PROFILE_EYE_SHARE: f32 = 0.35;
 /// A hand crop spans this many wrist-to-knuckle lengths (the pose model's hand points sit near
 /// the knuckles; the fingers reach about as far again).
 const HAND_SIDE_PER_PALM: f32 = 4.0;
@@ -41,23 +46,44 @@ impl Roi {
         self.centre + Vec2::from_angle(self.angle).rotate(d)
     }
 
-    /// The `n`² model input (interleaved RGB, row-major), sampled bilinearly at each input
-    /// pixel's centre; outside the photo the edge repeats.
+    /// Where a source point lies in an `n`² model input of this crop (inverse of [`Self::to_image`]).
+    pub fn to_input(&self, p: Vec2, n: usize) -> Vec2 {
+        let d = Vec2::from_angle(-self.angle).rotate(p - self.centre);
+        d * (n as f32 / self.side) + Vec2::splat(n as f32 / 2.0)
+    }
+
+    /// The `n`² model input (interleaved RGB, row-major); outside the photo the edge repeats.
+    /// Each input pixel is the mean of s × s bilinear samples spread over it, s the source
+    /// pixels per input pixel rounded up: one sample when the crop enlarges the photo, a box
+    /// filter when it shrinks it (a whole 512² photo at the pose detector's 224², a body crop
+    /// several times the photo's side), so that fine detail does not alias.
     pub fn sample(&self, source: &SourceImage, n: usize) -> Vec<f32> {
         let size = source.size as usize;
         let rgb = |k: usize| Vec3::from_slice(&source.rgb[3 * k..3 * k + 3]);
+        let s = (self.side / n as f32).ceil().max(1.0) as usize;
         let mut out = Vec::with_capacity(n * n * 3);
         for y in 0..n {
             for x in 0..n {
-                let p = self.to_image(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), n);
-                let c = bilinear_clamped(size, p.x - 0.5, p.y - 0.5, rgb);
-                out.extend_from_slice(&c.to_array());
+                let mut c = Vec3::ZERO;
+                for (i, j) in (0..s * s).map(|k| (k % s, k / s)) {
+                    let at = Vec2::new(
+                        x as f32 + (i as f32 + 0.5) / s as f32,
+                        y as f32 + (j as f32 + 0.5) / s as f32,
+                    );
+                    let p = self.to_image(at, n);
+                    c += bilinear_clamped(size, p.x - 0.5, p.y - 0.5, rgb);
+                }
+                out.extend_from_slice(&(c / (s * s) as f32).to_array());
             }
         }
         out
     }
 
-    /// The face crop from the pose model's eyes and nose (`None` if it is unsure of them).
+    /// The face crop from the pose model's eyes, nose and ears (`None` if it is unsure of the
+    /// eyes and nose): level with the eyes, 4.5 eye distances wide, and at least twice the
+    /// extent of those points, so that a head in profile (eyes close together, ear far from
+    /// nose) is framed whole; in profile the eye line says little about the head's roll, so the
+    /// crop stays upright (the face model's own re-crop levels it).
     pub fn face_from_pose(keypoints: &[Keypoint]) -> Option<Self> {
         let find = |name: &str| {
             keypoints
@@ -66,12 +92,31 @@ impl Roi {
                 .map(|k| k.pixel)
         };
         let (left, right, nose) = (find("left_eye")?, find("right_eye")?, find("nose")?);
+        let points: Vec<Vec2> = [Some(left), Some(right), Some(nose)]
+            .into_iter()
+            .chain(["left_ear", "right_ear"].map(find))
+            .flatten()
+            .collect();
+        let (lo, hi) = points.iter().fold(
+            (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        );
+        let extent = (hi - lo).max_element();
         // The subject's right eye is on the image's left: right → left runs along +x upright.
         let across = left - right;
+        let side =
+            (FACE_SIDE_PER_EYE_DISTANCE * across.length()).max(FACE_SIDE_PER_EXTENT * extent);
+        if across.length() < PROFILE_EYE_SHARE * extent {
+            return Some(Self {
+                centre: 0.5 * (lo + hi),
+                side,
+                angle: 0.0,
+            });
+        }
         let eyes = 0.5 * (left + right);
         Some(Self {
             centre: eyes + 0.5 * (nose - eyes),
-            side: FACE_SIDE_PER_EYE_DISTANCE * across.length(),
+            side,
             angle: across.y.atan2(across.x),
         })
     }
@@ -169,7 +214,7 @@ impl Roi {
     }
 
     /// A crop whose up (−y) points along `up` in the image.
-    fn upright(centre: Vec2, side: f32, up: Vec2) -> Self {
+    pub fn upright(centre: Vec2, side: f32, up: Vec2) -> Self {
         Self {
             centre,
             side,

@@ -325,7 +325,7 @@ pub fn reconstruct_photo_file(
             models.detect(&image)
         } else {
             // Only the mask is needed: the face model would find nothing the tracking lacks.
-            models.pose.detect(&image).map(|pose| Detections {
+            models.pose(&image).map(|pose| Detections {
                 pose,
                 face: None,
                 hands: Vec::new(),
