@@ -46,9 +46,19 @@ keep the committed model files unless the conversion itself changes):
   portrait and tests/data/camera.png (scikit-image's `camera.png`, CC0 by Lav Varshney, grey
   made RGB), the 33 body landmarks MediaPipe's own pose pipeline (`mediapipe.solutions.pose`,
   static images, the full model: detector, crop, landmarks) finds, in pixels.
+- assets/models/palm_detection_full.onnx: MediaPipe `palm_detection_full.tflite` (Apache-2.0,
+  same wheel), opset 17. Input [1,192,192,3] RGB in [0, 1] (the photo letterboxed to 192²);
+  outputs 2016×18 box and seven-keypoint offsets per SSD anchor and 2016 score logits.
+- tests/data/palm_detection_fixture.json: for tests/data/drawn_wave.png (the default body drawn
+  by this project's `synthetic::shaded` in the demo motion's wave, 512²; the test
+  `the_hand_is_found_on_a_drawn_body_where_its_joints_are` draws it again and checks that it is
+  this picture), the detector's input at 192²
+  (tests/data/drawn_wave_192.png), TFLite's outputs at its five best anchors, and the 21 points
+  of each hand MediaPipe's own hand pipeline (`mediapipe.solutions.hands`, static images) finds.
 Each converted model is checked against the TFLite interpreter on the real photo (not only random
 input) before anything is written. `--models iris` (a comma-separated subset of pose, face,
-hand, iris, detector) converts only those; the pose model's run also writes the demo portrait.
+hand, iris, detector, palm) converts only those; the pose model's run also writes the demo
+portrait.
 """
 import argparse
 import hashlib
@@ -68,7 +78,7 @@ SKIMAGE_ASTRONAUT_SHA256 = "88431cd9653ccd539741b555fb0a46b61558b301d4110412b5bc
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--skimage-wheel", required=True)
-    ap.add_argument("--models", default="pose,face,hand,iris,detector")
+    ap.add_argument("--models", default="pose,face,hand,iris,detector,palm")
     args = ap.parse_args()
     wanted = set(args.models.split(","))
 
@@ -105,6 +115,46 @@ def main():
         camera = camera.convert("RGB")
         camera.save(os.path.join(ROOT, "tests/data/camera.png"))
         detector(tf, ort, image, camera, os.path.join(modules, "pose_detection/pose_detection.tflite"), models)
+    if "palm" in wanted:
+        palm(tf, ort, os.path.join(modules, "palm_detection/palm_detection_full.tflite"), models)
+
+
+def palm(tf, ort, tflite, models):
+    import mediapipe
+    from PIL import Image
+    drawn = Image.open(os.path.join(ROOT, "tests/data/drawn_wave.png")).convert("RGB")
+    small = drawn.resize((192, 192), Image.BILINEAR)
+    x = np.asarray(small, np.float32)[None] / 255.0
+    outputs = run_tflite(tf, tflite, x)
+    onnx_bytes = to_onnx(tflite)
+    session = ort.InferenceSession(onnx_bytes)
+    got = dict(zip([o.name for o in session.get_outputs()],
+                   session.run(None, {session.get_inputs()[0].name: x})))
+    worst = max(np.abs(got[k] - outputs[k]).max() for k in outputs)
+    if worst > 0.01:
+        sys.exit(f"palm: ONNX and TFLite differ by {worst}")
+    boxes = next(v for v in outputs.values() if v.size == 2016 * 18).reshape(2016, 18)
+    scores = next(v for v in outputs.values() if v.size == 2016).ravel()
+    best = np.argsort(-scores)[:5]
+    print(f"palm: ONNX vs TFLite within {worst:.2e}; best score {1 / (1 + np.exp(-scores[best[0]])):.3f}")
+    with mediapipe.solutions.hands.Hands(static_image_mode=True, max_num_hands=2) as hands:
+        found = hands.process(np.asarray(drawn))
+    hands_found = [[[round(l.x * drawn.width, 2), round(l.y * drawn.height, 2)] for l in h.landmark]
+                   for h in (found.multi_hand_landmarks or [])]
+    print(f"palm: MediaPipe's hand pipeline finds {len(hands_found)} hands on the drawing")
+    small.save(os.path.join(ROOT, "tests/data/drawn_wave_192.png"))
+    fixture = {
+        "model": "mediapipe 0.10.21 modules/palm_detection/palm_detection_full.tflite",
+        "anchors": [int(i) for i in best],
+        "boxes": [[round(float(v), 3) for v in boxes[i]] for i in best],
+        "scores": [round(float(scores[i]), 4) for i in best],
+        "pipeline": "mediapipe.solutions.hands.Hands(static_image_mode=True, max_num_hands=2)",
+        "hands": hands_found,
+    }
+    path = os.path.join(models, "palm_detection_full.onnx")
+    open(path, "wb").write(onnx_bytes)
+    json.dump(fixture, open(os.path.join(ROOT, "tests/data/palm_detection_fixture.json"), "w"))
+    print(f"wrote {path} ({len(onnx_bytes) / 1e6:.1f} MB) and the palm fixture")
 
 
 def densified(tf, tflite, out):

@@ -7,10 +7,11 @@
 use glam::{Vec2, Vec3};
 
 use super::FitError;
-use crate::body::{BodyModel, Landmark, vertex_normals};
+use crate::body::{BodyModel, Landmark};
 use crate::camera::Camera;
 use crate::keypoints::{FACE_INPUT, FaceLandmarker};
 use crate::reconstruct::raster::{Fragments, rasterize};
+use crate::reconstruct::synthetic::shaded;
 
 /// The face-mesh points the fit uses: lip contours (outer and inner), eye contours, brows, the
 /// nose's ridge, tip and wings, and the chin. The face's outline is left out: on a turned head it
@@ -82,7 +83,13 @@ pub fn embed_face(body: &BodyModel, model: &mut FaceLandmarker) -> Result<FaceEm
         INVTANFOV,
     );
     let fragments = rasterize(&body.vertices, &body.triangles, &camera);
-    let input = shade(body, &fragments, (eye - target).normalize());
+    let input = shaded(
+        body,
+        &body.vertices,
+        &fragments,
+        (eye - target).normalize(),
+        SUPERSAMPLE as usize,
+    );
     let (found, presence) = model
         .run(&input)
         .map_err(|e| FitError::FaceModel(e.to_string()))?;
@@ -99,52 +106,6 @@ pub fn embed_face(body: &BodyModel, model: &mut FaceLandmarker) -> Result<FaceEm
         })
         .collect::<Result<_, _>>()?;
     Ok(FaceEmbedding { points, presence })
-}
-
-/// Skin, eyes and mouth cavity in flat colours under a light from the camera, box-filtered to
-/// the model's input in [0, 1].
-fn shade(body: &BodyModel, f: &Fragments, light: Vec3) -> Vec<f32> {
-    let (mut scratch, mut normals) = (Vec::new(), Vec::new());
-    vertex_normals(
-        &body.vertices,
-        &body.triangles,
-        &body.weld,
-        &mut scratch,
-        &mut normals,
-    );
-    let albedo = |part: Option<&str>| match part {
-        Some(p) if p.starts_with("eye_back") => Vec3::new(0.85, 0.83, 0.8),
-        Some(p) if p.starts_with("eye_front") => Vec3::new(0.25, 0.17, 0.12),
-        Some(p) if p.starts_with("eye_cavity") || p == "mouth_cavity" => Vec3::splat(0.08),
-        Some("tongue") => Vec3::new(0.55, 0.25, 0.25),
-        _ => Vec3::new(0.8, 0.6, 0.5),
-    };
-    let n = FACE_INPUT;
-    let s = SUPERSAMPLE as usize;
-    let mut out = vec![0.0; n * n * 3];
-    for y in 0..n * s {
-        for x in 0..n * s {
-            let i = f.index(x as u32, y as u32);
-            let colour = if f.triangle[i] < 0 {
-                Vec3::splat(0.55)
-            } else {
-                let tri = body.triangles[f.triangle[i] as usize];
-                let b = f.bary[i];
-                let normal: Vec3 = (0..3).map(|k| b[k] * normals[tri[k] as usize]).sum();
-                let corner = tri[b
-                    .iter()
-                    .enumerate()
-                    .fold(0, |m, (k, &v)| if v > b[m] { k } else { m })];
-                albedo(body.part_of(corner as usize))
-                    * (0.3 + 0.7 * normal.normalize_or_zero().dot(light).max(0.0))
-            };
-            let o = ((y / s) * n + x / s) * 3;
-            for c in 0..3 {
-                out[o + c] += colour[c] / (s * s) as f32;
-            }
-        }
-    }
-    out
 }
 
 /// Parts a face point never sits on: the model's eye and lip contours mark the lid and lip

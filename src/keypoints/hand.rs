@@ -93,17 +93,28 @@ impl HandLandmarker {
         Ok((points, presence))
     }
 
-    /// The subject's `side` hand where the pose model puts it, refined once by re-cropping around
-    /// the first answer; `None` if the pose model is unsure of the wrist or no hand is there.
+    /// The subject's `side` hand where the pose model puts it ([`Self::detect_in`]); `None` if
+    /// the pose model is unsure of the wrist or no hand is there.
     pub fn detect(
         &mut self,
         source: &SourceImage,
         pose: &PoseKeypoints,
         side: Side,
     ) -> Result<Option<HandLandmarks>, OnnxError> {
-        let Some(roi) = Roi::hand_from_pose(pose, side) else {
-            return Ok(None);
-        };
+        match Roi::hand_from_pose(pose, side) {
+            Some(roi) => self.detect_in(source, roi, side),
+            None => Ok(None),
+        }
+    }
+
+    /// The subject's `side` hand in `roi`, refined once by re-cropping around the first answer;
+    /// `None` if no hand is there.
+    pub fn detect_in(
+        &mut self,
+        source: &SourceImage,
+        roi: Roi,
+        side: Side,
+    ) -> Result<Option<HandLandmarks>, OnnxError> {
         let found = roi.track(
             source,
             HAND_INPUT,

@@ -10,8 +10,10 @@ mod face;
 mod hand;
 mod iris;
 mod model;
+mod palm;
 mod pose;
 mod roi;
+mod ssd;
 
 pub use detector::{DETECTOR_INPUT, DETECTOR_MODEL_PATH, PersonDetection, PoseDetector};
 pub use face::{
@@ -19,8 +21,10 @@ pub use face::{
 };
 pub use hand::{HAND_INPUT, HAND_MODEL_PATH, HAND_POINTS, HandLandmarker, HandLandmarks, Side};
 pub use iris::{IRIS_INPUT, IRIS_MODEL_PATH, Iris, IrisLandmarker};
+pub use palm::{PALM_INPUT, PALM_MODEL_PATH, PalmDetection, PalmDetector};
 pub use pose::{COCO_FROM_MEDIAPIPE, POSE_INPUT, POSE_MODEL_PATH, PoseKeypoints, PoseLandmarker};
 pub use roi::Roi;
+pub use ssd::Detection;
 
 use std::path::Path;
 
@@ -53,12 +57,13 @@ pub struct Detections {
 
 /// Where the shipped models are, and the file names [`Landmarkers::load_dir`] looks for.
 pub const MODELS_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/models");
-pub const MODEL_FILES: [&str; 5] = [
+pub const MODEL_FILES: [&str; 6] = [
     "pose_detection.onnx",
     "pose_landmark_full.onnx",
     "face_landmark.onnx",
     "hand_landmark_full.onnx",
     "iris_landmark.onnx",
+    "palm_detection_full.onnx",
 ];
 
 /// The keypoint models, loaded once and run on each photo.
@@ -68,6 +73,7 @@ pub struct Landmarkers {
     pub face: FaceLandmarker,
     pub hand: HandLandmarker,
     pub iris: IrisLandmarker,
+    pub palm: PalmDetector,
 }
 
 impl Landmarkers {
@@ -91,13 +97,14 @@ impl Landmarkers {
                 reason: format!("the keypoint model folder lacks {}", missing.join(", ")),
             });
         }
-        let [detector, pose, face, hand, iris] = MODEL_FILES.map(|f| dir.join(f));
+        let [detector, pose, face, hand, iris, palm] = MODEL_FILES.map(|f| dir.join(f));
         Ok(Self {
             detector: PoseDetector::load_from(runtime, &detector)?,
             pose: PoseLandmarker::load_from(runtime, &pose)?,
             face: FaceLandmarker::load_from(runtime, &face)?,
             hand: HandLandmarker::load_from(runtime, &hand)?,
             iris: IrisLandmarker::load_from(runtime, &iris)?,
+            palm: PalmDetector::load_from(runtime, &palm)?,
         })
     }
 
@@ -121,8 +128,9 @@ impl Landmarkers {
         })
     }
 
-    /// The pose pipeline on the photo, then the face and hand models where it puts them, and
-    /// the iris model in the face's eyes.
+    /// The pose pipeline on the photo, then the face and hand models where it puts them (and
+    /// the hand model where the palm detector finds hands it did not), and the iris model in the
+    /// face's eyes.
     pub fn detect(&mut self, source: &SourceImage) -> Result<Detections, OnnxError> {
         let pose = self.pose(source)?;
         let face = match Roi::face_from_pose(&pose.keypoints) {
@@ -133,6 +141,7 @@ impl Landmarkers {
         for side in [Side::Left, Side::Right] {
             hands.extend(self.hand.detect(source, &pose, side)?);
         }
+        self.hands_from_palms(source, &pose, &mut hands)?;
         let irises = match &face {
             Some(face) => self.iris.detect(source, face)?,
             None => Vec::new(),
@@ -143,6 +152,36 @@ impl Landmarkers {
             hands,
             irises,
         })
+    }
+}
+
+impl Landmarkers {
+    /// Hands the pose model did not place (a wrist it was unsure of, a hand far from where it
+    /// put it), found from the palm detector: each palm no found hand's crop covers is taken as
+    /// the hand of the side whose pose wrist is nearer, if that side has none yet.
+    pub fn hands_from_palms(
+        &mut self,
+        source: &SourceImage,
+        pose: &PoseKeypoints,
+        hands: &mut Vec<HandLandmarks>,
+    ) -> Result<(), OnnxError> {
+        for palm in self.palm.detect(source)? {
+            if hands.iter().any(|h| h.roi.covers(palm.knuckle)) {
+                continue;
+            }
+            let wrist = |side| pose.point(if side == Side::Left { 15 } else { 16 }).0;
+            let side = [Side::Left, Side::Right]
+                .into_iter()
+                .filter(|&s| hands.iter().all(|h| h.side != s))
+                .min_by(|&a, &b| {
+                    let d = |s| wrist(s).distance(palm.wrist);
+                    d(a).total_cmp(&d(b))
+                });
+            if let Some(side) = side {
+                hands.extend(self.hand.detect_in(source, palm.roi, side)?);
+            }
+        }
+        Ok(())
     }
 }
 

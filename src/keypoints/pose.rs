@@ -119,12 +119,7 @@ impl PoseLandmarker {
         source: &SourceImage,
         roi: Option<Roi>,
     ) -> Result<PoseKeypoints, OnnxError> {
-        let side = source.size as f32;
-        let roi = roi.unwrap_or(Roi {
-            centre: Vec2::splat(side / 2.0),
-            side,
-            angle: 0.0,
-        });
+        let roi = roi.unwrap_or(Roi::whole(source.size as f32));
         self.run(&roi.sample(source, POSE_INPUT), roi)
     }
 

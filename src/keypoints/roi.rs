@@ -46,6 +46,21 @@ impl Roi {
         self.centre + Vec2::from_angle(self.angle).rotate(d)
     }
 
+    /// The whole of a `side`² photo.
+    pub fn whole(side: f32) -> Self {
+        Self {
+            centre: Vec2::splat(side / 2.0),
+            side,
+            angle: 0.0,
+        }
+    }
+
+    /// Whether a source point lies inside the crop.
+    pub fn covers(&self, p: Vec2) -> bool {
+        let d = Vec2::from_angle(-self.angle).rotate(p - self.centre);
+        d.abs().max_element() <= self.side / 2.0
+    }
+
     /// Where a source point lies in an `n`² model input of this crop (inverse of [`Self::to_image`]).
     pub fn to_input(&self, p: Vec2, n: usize) -> Vec2 {
         let d = Vec2::from_angle(-self.angle).rotate(p - self.centre);

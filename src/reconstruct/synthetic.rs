@@ -6,8 +6,8 @@ use glam::Vec3;
 use image::{Rgba, RgbaImage};
 
 use super::SOURCE_SIZE;
-use super::raster::rasterize;
-use crate::body::{BodyModel, BodyPose, PoseError, PosedBody};
+use super::raster::{Fragments, rasterize};
+use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, vertex_normals};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
 
 /// A smooth colour pattern over the rest surface: bands with periods of 0.6–1 m, so a 512²
@@ -60,4 +60,59 @@ pub fn photo(
         let [r, g, bl] = colour(rest);
         Rgba([q(r), q(g), q(bl), 255])
     }))
+}
+
+/// A plainly lit drawing of `body` with its surface at `vertices` (rest or posed), as
+/// rasterized into `f`: skin, eyes and mouth cavity in flat colours under a light from
+/// `light`'s direction, grey where no triangle is, box-filtered by `supersample` (the fragments'
+/// side is that many times the result's); RGB in [0, 1], row-major. The keypoint models accept it
+/// as a person: the face model places its points on the body's own face this way.
+pub fn shaded(
+    body: &BodyModel,
+    vertices: &[Vec3],
+    f: &Fragments,
+    light: Vec3,
+    supersample: usize,
+) -> Vec<f32> {
+    let (mut scratch, mut normals) = (Vec::new(), Vec::new());
+    vertex_normals(
+        vertices,
+        &body.triangles,
+        &body.weld,
+        &mut scratch,
+        &mut normals,
+    );
+    let albedo = |part: Option<&str>| match part {
+        Some(p) if p.starts_with("eye_back") => Vec3::new(0.85, 0.83, 0.8),
+        Some(p) if p.starts_with("eye_front") => Vec3::new(0.25, 0.17, 0.12),
+        Some(p) if p.starts_with("eye_cavity") || p == "mouth_cavity" => Vec3::splat(0.08),
+        Some("tongue") => Vec3::new(0.55, 0.25, 0.25),
+        _ => Vec3::new(0.8, 0.6, 0.5),
+    };
+    let s = supersample;
+    let (w, h) = (f.width as usize / s, f.height as usize / s);
+    let mut out = vec![0.0; w * h * 3];
+    for y in 0..h * s {
+        for x in 0..w * s {
+            let i = f.index(x as u32, y as u32);
+            let colour = if f.triangle[i] < 0 {
+                Vec3::splat(0.55)
+            } else {
+                let tri = body.triangles[f.triangle[i] as usize];
+                let b = f.bary[i];
+                let normal: Vec3 = (0..3).map(|k| b[k] * normals[tri[k] as usize]).sum();
+                let corner = tri[b
+                    .iter()
+                    .enumerate()
+                    .fold(0, |m, (k, &v)| if v > b[m] { k } else { m })];
+                albedo(body.part_of(corner as usize))
+                    * (0.3 + 0.7 * normal.normalize_or_zero().dot(light).max(0.0))
+            };
+            let o = ((y / s) * w + x / s) * 3;
+            for c in 0..3 {
+                out[o + c] += colour[c] / (s * s) as f32;
+            }
+        }
+    }
+    out
 }
