@@ -1,9 +1,10 @@
-//! 2D keypoints on a photo from MediaPipe's landmark models (Apache-2.0, converted to ONNX by
-//! `tools/convert_mediapipe.py`) through ONNX Runtime, as MediaPipe's holistic pipeline chains
-//! them: the pose detector finds the person, the pose model in the crop it places gives the body
-//! points and a person mask; the
-//! face and hand models then see crops placed by the pose model's face and hand points, and
-//! second crops placed by their own first answers; the iris model sees each eye of the face mesh.
+//! 2D keypoints on a photo from MediaPipe's detectors and landmark models (Apache-2.0, converted
+//! to ONNX by `tools/convert_mediapipe.py`) through ONNX Runtime, chained as MediaPipe's holistic
+//! pipeline chains them: the pose detector finds the person, the pose model in the crop it places
+//! gives the body points and a person mask; the face and hand models see crops placed by the pose
+//! model's face and hand points, then second crops placed by their own first answers; the palm
+//! detector places crops for hands the pose model missed; the iris model sees each eye of the
+//! face mesh.
 
 mod detector;
 mod face;
@@ -49,7 +50,8 @@ pub struct Detections {
     pub pose: PoseKeypoints,
     /// `None` when the pose model saw no face or the face model rejected its crop.
     pub face: Option<FaceLandmarks>,
-    /// The hands the hand model found where the pose model put wrists (0, 1 or 2).
+    /// The hands the hand model found where the pose model put wrists or the palm detector
+    /// palms (0, 1 or 2).
     pub hands: Vec<HandLandmarks>,
     /// The irises in the face mesh's eyes (none without a face).
     pub irises: Vec<Iris>,
@@ -153,9 +155,7 @@ impl Landmarkers {
             irises,
         })
     }
-}
 
-impl Landmarkers {
     /// Hands the pose model did not place (a wrist it was unsure of, a hand far from where it
     /// put it), found from the palm detector: each palm no found hand's crop covers is taken as
     /// the hand of the side whose pose wrist is nearer, if that side has none yet.
