@@ -167,7 +167,7 @@ fn fit_writes_tracking_and_takes_a_model_folder() {
     assert!(!ok && !out.exists());
     assert!(
         stderr.contains(
-            "lacks pose_detection.onnx, pose_landmark_full.onnx, hand_landmark_full.onnx, iris_landmark.onnx, palm_detection_full.onnx"
+            "lacks pose_detection.onnx, pose_landmark_full.onnx, hand_landmark_full.onnx, iris_landmark.onnx, palm_detection_full.onnx, face_detection_short_range.onnx"
         ),
         "{stderr}"
     );

@@ -344,15 +344,10 @@ fn face_model_matches_mediapipe_on_the_demo_face() {
 /// the face in it and in its own re-crop. The points must agree with what MediaPipe's interpreter
 /// found on the fixture's hand-placed crop (mapped back to the photo): the same model on two
 /// slightly different crops of one face.
-#[test]
-fn the_face_is_found_from_the_pose_crop() {
-    let mut models = Landmarkers::load(runtime()).expect("shipped models");
-    let source =
-        guava::reconstruct::SourceImage::load(&data("assets/demo_portrait.png")).expect("portrait");
-    let found = models.detect(&source).expect("runs");
-    let face = found.face.expect("a face");
-    println!("presence {}, roi {:?}", face.presence, face.roi);
-    assert!(face.presence > 0.9);
+/// A face mesh found on the demo portrait against what MediaPipe's interpreter found on the
+/// fixture's hand-placed crop (mapped back to the photo): the same model on two slightly
+/// different crops of one face agrees to a few percent of the eye span. Returns the eye span.
+fn agrees_with_the_fixture_face(face: &FaceLandmarks) -> f32 {
     let fixture = fixture("tests/data/face_landmark_fixture.json");
     let boxed = fixture["box"].as_array().expect("box");
     let b = |i: usize| boxed[i].as_f64().expect("number") as f32;
@@ -375,11 +370,23 @@ fn the_face_is_found_from_the_pose_crop() {
     println!(
         "against the fixture crop: mean {mean:.2} px, worst {worst:.2} px (eye span {span:.0} px)"
     );
-    // A few percent of the eye span: the model's answer moves a little with the crop.
     assert!(
         mean < 0.05 * span && worst < 0.15 * span,
         "mean {mean}, worst {worst}"
     );
+    span
+}
+
+#[test]
+fn the_face_is_found_from_the_pose_crop() {
+    let mut models = Landmarkers::load(runtime()).expect("shipped models");
+    let source =
+        guava::reconstruct::SourceImage::load(&data("assets/demo_portrait.png")).expect("portrait");
+    let found = models.detect(&source).expect("runs");
+    let face = found.face.expect("a face");
+    println!("presence {}, roi {:?}", face.presence, face.roi);
+    assert!(face.presence > 0.9);
+    let span = agrees_with_the_fixture_face(&face);
     // The second crop is placed by the mesh itself: a third pass would barely move it (measured:
     // 2.5 px and 6.5 % smaller, the first crop being framed by the ears as well as the eyes).
     let again = Roi::face_from_landmarks(&face.points);
@@ -1158,4 +1165,91 @@ fn palms_find_the_hands_the_pose_model_leaves_out() {
             h.side
         );
     }
+}
+
+/// Our ONNX path of the face detector against MediaPipe's interpreter at its five best anchors on
+/// the demo portrait (the same 8-bit 128² input, scaled to [-1, 1] as MediaPipe's graph does).
+#[test]
+fn face_detector_matches_mediapipe_on_the_demo_portrait() {
+    use guava::keypoints::{FACE_DETECTOR_INPUT, FaceDetector};
+    let input: Vec<f32> = input_of("tests/data/demo_portrait_128.png")
+        .iter()
+        .map(|v| 2.0 * v - 1.0)
+        .collect();
+    assert_eq!(input.len(), FACE_DETECTOR_INPUT * FACE_DETECTOR_INPUT * 3);
+    let fixture = fixture("tests/data/face_detection_fixture.json");
+    let mut detector = FaceDetector::load(runtime()).expect("shipped face detector");
+    let (boxes, scores) = detector.run(&input).expect("runs");
+    let mut worst = 0.0f64;
+    for (k, anchor) in fixture["anchors"]
+        .as_array()
+        .expect("anchors")
+        .iter()
+        .enumerate()
+    {
+        let i = anchor.as_u64().expect("index") as usize;
+        for (j, w) in fixture["boxes"][k]
+            .as_array()
+            .expect("values")
+            .iter()
+            .enumerate()
+        {
+            worst = worst.max((boxes[i * 16 + j] as f64 - w.as_f64().expect("number")).abs());
+        }
+        let s = fixture["scores"][k].as_f64().expect("score");
+        worst = worst.max((scores[i] as f64 - s).abs());
+    }
+    println!("face detector: ONNX Runtime vs TFLite within {worst:.2e} at the five best anchors");
+    // The conversion matched the interpreter to 7.6e-5 over all anchors.
+    assert!(worst < 1e-2, "{worst}");
+    // Its eye keypoints land on her eyes (the face fixture's eye centres, within a tenth of the
+    // eye span).
+    let face = detector.decode(&boxes, &scores).expect("a face");
+    let eyes = [face.keypoints[0] * 512.0, face.keypoints[1] * 512.0];
+    println!("face detector: score {:.2}, eyes at {eyes:?}", face.score);
+    let mesh = fixture_face_points();
+    let centre = |a: usize, b: usize| 0.5 * (mesh[a] + mesh[b]);
+    let (right, left) = (centre(33, 133), centre(362, 263));
+    let span = right.distance(left);
+    assert!(eyes[0].distance(right) < 0.1 * span && eyes[1].distance(left) < 0.1 * span);
+}
+
+/// The face fixture's 468 points in the demo portrait's pixels.
+fn fixture_face_points() -> Vec<Vec2> {
+    let fixture = fixture("tests/data/face_landmark_fixture.json");
+    let boxed = fixture["box"].as_array().expect("box");
+    let b = |i: usize| boxed[i].as_f64().expect("number") as f32;
+    let scale = (b(2) - b(0)) / FACE_INPUT as f32;
+    fixture["landmarks"]
+        .as_array()
+        .expect("landmarks")
+        .iter()
+        .map(|e| {
+            Vec2::new(
+                b(0) + scale * e[0].as_f64().expect("x") as f32,
+                b(1) + scale * e[1].as_f64().expect("y") as f32,
+            )
+        })
+        .collect()
+}
+
+/// A face the pose model does not place (its eyes and nose made unsure) is found from the face
+/// detector's crop, and agrees with the fixture as the pose-placed one does.
+#[test]
+fn the_face_detector_finds_the_face_the_pose_model_leaves_out() {
+    let mut models = Landmarkers::load(runtime()).expect("shipped models");
+    let source =
+        guava::reconstruct::SourceImage::load(&data("assets/demo_portrait.png")).expect("portrait");
+    let mut pose = models.pose(&source).expect("runs");
+    for k in pose.keypoints.iter_mut().take(5) {
+        k.confidence = 0.0;
+    }
+    assert!(Roi::face_from_pose(&pose.keypoints).is_none());
+    let face = models.face(&source, &pose).expect("runs").expect("a face");
+    println!(
+        "from the face detector: presence {}, roi {:?}",
+        face.presence, face.roi
+    );
+    assert!(face.presence > 0.9);
+    agrees_with_the_fixture_face(&face);
 }

@@ -55,10 +55,15 @@ keep the committed model files unless the conversion itself changes):
   this picture), the detector's input at 192²
   (tests/data/drawn_wave_192.png), TFLite's outputs at its five best anchors, and the 21 points
   of each hand MediaPipe's own hand pipeline (`mediapipe.solutions.hands`, static images) finds.
+- assets/models/face_detection_short_range.onnx: MediaPipe `face_detection_short_range.tflite`
+  (Apache-2.0, same wheel), opset 17. Input [1,128,128,3] RGB in [-1, 1] (the photo letterboxed
+  to 128²); outputs 896×16 box and six-keypoint offsets per SSD anchor and 896 score logits.
+- tests/data/face_detection_fixture.json and tests/data/demo_portrait_128.png: the detector's
+  input for the demo portrait and TFLite's outputs at its five best anchors.
 Each converted model is checked against the TFLite interpreter on the real photo (not only random
 input) before anything is written. `--models iris` (a comma-separated subset of pose, face,
-hand, iris, detector, palm) converts only those; the pose model's run also writes the demo
-portrait.
+hand, iris, detector, palm, facedet) converts only those; the pose model's run also writes the
+demo portrait.
 """
 import argparse
 import hashlib
@@ -78,7 +83,7 @@ SKIMAGE_ASTRONAUT_SHA256 = "88431cd9653ccd539741b555fb0a46b61558b301d4110412b5bc
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--skimage-wheel", required=True)
-    ap.add_argument("--models", default="pose,face,hand,iris,detector,palm")
+    ap.add_argument("--models", default="pose,face,hand,iris,detector,palm,facedet")
     args = ap.parse_args()
     wanted = set(args.models.split(","))
 
@@ -117,6 +122,38 @@ def main():
         detector(tf, ort, image, camera, os.path.join(modules, "pose_detection/pose_detection.tflite"), models)
     if "palm" in wanted:
         palm(tf, ort, os.path.join(modules, "palm_detection/palm_detection_full.tflite"), models)
+    if "facedet" in wanted:
+        face_detector(tf, ort, image, os.path.join(modules, "face_detection/face_detection_short_range.tflite"), models)
+
+
+def face_detector(tf, ort, portrait, tflite, models):
+    from PIL import Image
+    small = portrait.resize((128, 128), Image.BILINEAR)
+    x = np.asarray(small, np.float32)[None] / 127.5 - 1.0
+    outputs = run_tflite(tf, tflite, x)
+    onnx_bytes = to_onnx(tflite)
+    session = ort.InferenceSession(onnx_bytes)
+    got = dict(zip([o.name for o in session.get_outputs()],
+                   session.run(None, {session.get_inputs()[0].name: x})))
+    worst = max(np.abs(got[k] - outputs[k]).max() for k in outputs)
+    if worst > 0.01:
+        sys.exit(f"face detector: ONNX and TFLite differ by {worst}")
+    boxes = next(v for v in outputs.values() if v.size == 896 * 16).reshape(896, 16)
+    scores = next(v for v in outputs.values() if v.size == 896).ravel()
+    best = np.argsort(-scores)[:5]
+    print(f"face detector: ONNX vs TFLite within {worst:.2e}; best score "
+          f"{1 / (1 + np.exp(-scores[best[0]])):.3f}")
+    small.save(os.path.join(ROOT, "tests/data/demo_portrait_128.png"))
+    fixture = {
+        "model": "mediapipe 0.10.21 modules/face_detection/face_detection_short_range.tflite",
+        "anchors": [int(i) for i in best],
+        "boxes": [[round(float(v), 3) for v in boxes[i]] for i in best],
+        "scores": [round(float(scores[i]), 4) for i in best],
+    }
+    path = os.path.join(models, "face_detection_short_range.onnx")
+    open(path, "wb").write(onnx_bytes)
+    json.dump(fixture, open(os.path.join(ROOT, "tests/data/face_detection_fixture.json"), "w"))
+    print(f"wrote {path} ({len(onnx_bytes) / 1e6:.1f} MB) and the face detector fixture")
 
 
 def palm(tf, ort, tflite, models):

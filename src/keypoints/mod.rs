@@ -3,11 +3,12 @@
 //! pipeline chains them: the pose detector finds the person, the pose model in the crop it places
 //! gives the body points and a person mask; the face and hand models see crops placed by the pose
 //! model's face and hand points, then second crops placed by their own first answers; the palm
-//! detector places crops for hands the pose model missed; the iris model sees each eye of the
-//! face mesh.
+//! and face detectors place crops for hands and faces the pose model missed; the iris model sees
+//! each eye of the face mesh.
 
 mod detector;
 mod face;
+mod face_detector;
 mod hand;
 mod iris;
 mod model;
@@ -20,6 +21,7 @@ pub use detector::{DETECTOR_INPUT, DETECTOR_MODEL_PATH, PersonDetection, PoseDet
 pub use face::{
     FACE_EYE_CORNERS, FACE_INPUT, FACE_MODEL_PATH, FACE_POINTS, FaceLandmarker, FaceLandmarks,
 };
+pub use face_detector::{FACE_DETECTOR_INPUT, FACE_DETECTOR_MODEL_PATH, FaceDetector};
 pub use hand::{HAND_INPUT, HAND_MODEL_PATH, HAND_POINTS, HandLandmarker, HandLandmarks, Side};
 pub use iris::{IRIS_INPUT, IRIS_MODEL_PATH, Iris, IrisLandmarker};
 pub use palm::{PALM_INPUT, PALM_MODEL_PATH, PalmDetection, PalmDetector};
@@ -59,13 +61,14 @@ pub struct Detections {
 
 /// Where the shipped models are, and the file names [`Landmarkers::load_dir`] looks for.
 pub const MODELS_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/models");
-pub const MODEL_FILES: [&str; 6] = [
+pub const MODEL_FILES: [&str; 7] = [
     "pose_detection.onnx",
     "pose_landmark_full.onnx",
     "face_landmark.onnx",
     "hand_landmark_full.onnx",
     "iris_landmark.onnx",
     "palm_detection_full.onnx",
+    "face_detection_short_range.onnx",
 ];
 
 /// The keypoint models, loaded once and run on each photo.
@@ -76,6 +79,7 @@ pub struct Landmarkers {
     pub hand: HandLandmarker,
     pub iris: IrisLandmarker,
     pub palm: PalmDetector,
+    pub face_detector: FaceDetector,
 }
 
 impl Landmarkers {
@@ -99,7 +103,8 @@ impl Landmarkers {
                 reason: format!("the keypoint model folder lacks {}", missing.join(", ")),
             });
         }
-        let [detector, pose, face, hand, iris, palm] = MODEL_FILES.map(|f| dir.join(f));
+        let [detector, pose, face, hand, iris, palm, face_detector] =
+            MODEL_FILES.map(|f| dir.join(f));
         Ok(Self {
             detector: PoseDetector::load_from(runtime, &detector)?,
             pose: PoseLandmarker::load_from(runtime, &pose)?,
@@ -107,6 +112,7 @@ impl Landmarkers {
             hand: HandLandmarker::load_from(runtime, &hand)?,
             iris: IrisLandmarker::load_from(runtime, &iris)?,
             palm: PalmDetector::load_from(runtime, &palm)?,
+            face_detector: FaceDetector::load_from(runtime, &face_detector)?,
         })
     }
 
@@ -135,10 +141,7 @@ impl Landmarkers {
     /// face's eyes.
     pub fn detect(&mut self, source: &SourceImage) -> Result<Detections, OnnxError> {
         let pose = self.pose(source)?;
-        let face = match Roi::face_from_pose(&pose.keypoints) {
-            Some(roi) => self.face.detect(source, roi)?,
-            None => None,
-        };
+        let face = self.face(source, &pose)?;
         let mut hands = Vec::new();
         for side in [Side::Left, Side::Right] {
             hands.extend(self.hand.detect(source, &pose, side)?);
@@ -154,6 +157,24 @@ impl Landmarkers {
             hands,
             irises,
         })
+    }
+
+    /// The face mesh in the crop the pose model's face points place, or, when they place none
+    /// or the face model finds no face there, in the face detector's crop.
+    pub fn face(
+        &mut self,
+        source: &SourceImage,
+        pose: &PoseKeypoints,
+    ) -> Result<Option<FaceLandmarks>, OnnxError> {
+        if let Some(roi) = Roi::face_from_pose(&pose.keypoints)
+            && let Some(face) = self.face.detect(source, roi)?
+        {
+            return Ok(Some(face));
+        }
+        match self.face_detector.detect(source)? {
+            Some(roi) => self.face.detect(source, roi),
+            None => Ok(None),
+        }
     }
 
     /// Hands the pose model did not place (a wrist it was unsure of, a hand far from where it
