@@ -1253,3 +1253,34 @@ fn the_face_detector_finds_the_face_the_pose_model_leaves_out() {
     assert!(face.presence > 0.9);
     agrees_with_the_fixture_face(&face);
 }
+
+/// A photo with nobody in it is refused with the pose model's presence, not fitted: on noise the
+/// landmark model still reports ten "confident" points (as `guava fit` once fitted and wrote).
+#[test]
+fn a_photo_without_a_person_is_refused() {
+    let body = BodyModel::default_body().expect("body");
+    let mut models = Landmarkers::load(runtime()).expect("shipped models");
+    let mut state = 12345u32;
+    let noise = image::RgbaImage::from_fn(512, 512, |_, _| {
+        let mut next = || {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (state >> 24) as u8
+        };
+        image::Rgba([next(), next(), next(), 255])
+    });
+    for (name, photo) in [
+        ("noise", noise),
+        (
+            "grey",
+            image::RgbaImage::from_pixel(512, 512, image::Rgba([128, 128, 128, 255])),
+        ),
+    ] {
+        let source =
+            guava::reconstruct::SourceImage::from_rgba(&photo, false, name).expect("source");
+        let found = models.detect(&source).expect("runs");
+        let e = guava::fit::fit_detections(&body, &found, &mut models.face, 512)
+            .expect_err("nobody to fit");
+        println!("{name}: {e}");
+        assert!(matches!(e, FitError::NoPerson { .. }), "{name}: {e}");
+    }
+}

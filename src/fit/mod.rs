@@ -99,6 +99,9 @@ pub const SHAPE_PRIOR_PX: f64 = 20.0;
 pub const EXPRESSION_PRIOR_PER_EYE_SPAN: f64 = 0.03;
 /// The global orientation's prior is weaker: people face the camera at any angle.
 const ROOT_PRIOR_PX_PER_RAD: f64 = 2.0;
+/// Below this pose presence the pose model sees no person (MediaPipe's tracking threshold), and
+/// its landmarks, confident-looking or not, are not fitted.
+pub const MIN_PRESENCE: f32 = 0.5;
 /// Keypoints the model is less sure of are left out.
 pub const MIN_CONFIDENCE: f32 = 0.5;
 /// Hand points count like face points; finger joints turned by 1 rad cost as much as a point off
@@ -117,6 +120,10 @@ const BODY_START_DEPTHS: [f32; 3] = [0.85, 1.0, 1.2];
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum FitError {
+    #[error(
+        "no person found: the pose model's presence is {presence:.2} (it needs {MIN_PRESENCE}); its points would be guesses"
+    )]
+    NoPerson { presence: f32 },
     #[error(
         "only {found} confident body keypoints ({names}); the fit needs both shoulders and at least 4 in all"
     )]
@@ -377,6 +384,10 @@ pub fn fit_detections(
     face_model: &mut FaceLandmarker,
     side: u32,
 ) -> Result<(SourceView, FitReport), FitError> {
+    let presence = detections.pose.presence;
+    if presence.is_nan() || presence < MIN_PRESENCE {
+        return Err(FitError::NoPerson { presence });
+    }
     let embedding = detections
         .face
         .as_ref()
