@@ -869,21 +869,7 @@ fn pose_detector_matches_mediapipe_on_the_demo_portrait() {
     let portrait = &fixture["demo_portrait"];
     let mut detector = PoseDetector::load(runtime()).expect("shipped detector");
     let (boxes, scores) = detector.run(&input).expect("runs");
-    let mut worst = 0.0f64;
-    for (k, anchor) in portrait["anchors"]
-        .as_array()
-        .expect("anchors")
-        .iter()
-        .enumerate()
-    {
-        let i = anchor.as_u64().expect("index") as usize;
-        let want = portrait["boxes"][k].as_array().expect("values");
-        for (j, w) in want.iter().enumerate() {
-            worst = worst.max((boxes[i * 12 + j] as f64 - w.as_f64().expect("number")).abs());
-        }
-        let s = portrait["scores"][k].as_f64().expect("score");
-        worst = worst.max((scores[i] as f64 - s).abs());
-    }
+    let worst = off_at_best_anchors(&boxes, &scores, portrait);
     println!("detector: ONNX Runtime vs TFLite within {worst:.2e} at the five best anchors");
     // Values run to ~200 input pixels; the conversion matched the interpreter to 7e-4.
     assert!(worst < 1e-2, "{worst}");
@@ -1035,25 +1021,7 @@ fn palm_detector_matches_mediapipe_on_the_drawn_wave() {
     let fixture = fixture("tests/data/palm_detection_fixture.json");
     let mut detector = PalmDetector::load(runtime()).expect("shipped palm detector");
     let (boxes, scores) = detector.run(&input).expect("runs");
-    let mut worst = 0.0f64;
-    for (k, anchor) in fixture["anchors"]
-        .as_array()
-        .expect("anchors")
-        .iter()
-        .enumerate()
-    {
-        let i = anchor.as_u64().expect("index") as usize;
-        for (j, w) in fixture["boxes"][k]
-            .as_array()
-            .expect("values")
-            .iter()
-            .enumerate()
-        {
-            worst = worst.max((boxes[i * 18 + j] as f64 - w.as_f64().expect("number")).abs());
-        }
-        let s = fixture["scores"][k].as_f64().expect("score");
-        worst = worst.max((scores[i] as f64 - s).abs());
-    }
+    let worst = off_at_best_anchors(&boxes, &scores, &fixture);
     println!("palm detector: ONNX Runtime vs TFLite within {worst:.2e} at the five best anchors");
     // The conversion matched the interpreter to 1.8e-4 over all anchors.
     assert!(worst < 1e-2, "{worst}");
@@ -1180,25 +1148,7 @@ fn face_detector_matches_mediapipe_on_the_demo_portrait() {
     let fixture = fixture("tests/data/face_detection_fixture.json");
     let mut detector = FaceDetector::load(runtime()).expect("shipped face detector");
     let (boxes, scores) = detector.run(&input).expect("runs");
-    let mut worst = 0.0f64;
-    for (k, anchor) in fixture["anchors"]
-        .as_array()
-        .expect("anchors")
-        .iter()
-        .enumerate()
-    {
-        let i = anchor.as_u64().expect("index") as usize;
-        for (j, w) in fixture["boxes"][k]
-            .as_array()
-            .expect("values")
-            .iter()
-            .enumerate()
-        {
-            worst = worst.max((boxes[i * 16 + j] as f64 - w.as_f64().expect("number")).abs());
-        }
-        let s = fixture["scores"][k].as_f64().expect("score");
-        worst = worst.max((scores[i] as f64 - s).abs());
-    }
+    let worst = off_at_best_anchors(&boxes, &scores, &fixture);
     println!("face detector: ONNX Runtime vs TFLite within {worst:.2e} at the five best anchors");
     // The conversion matched the interpreter to 7.6e-5 over all anchors.
     assert!(worst < 1e-2, "{worst}");
@@ -1283,4 +1233,26 @@ fn a_photo_without_a_person_is_refused() {
         println!("{name}: {e}");
         assert!(matches!(e, FitError::NoPerson { .. }), "{name}: {e}");
     }
+}
+
+/// The largest difference between a detector's raw outputs and the fixture's (TFLite's) at the
+/// anchors it lists.
+fn off_at_best_anchors(boxes: &[f32], scores: &[f32], fixture: &serde_json::Value) -> f64 {
+    let anchors = fixture["anchors"].as_array().expect("anchors");
+    let values = boxes.len() / scores.len();
+    let mut worst = 0.0f64;
+    for (k, anchor) in anchors.iter().enumerate() {
+        let i = anchor.as_u64().expect("index") as usize;
+        for (j, w) in fixture["boxes"][k]
+            .as_array()
+            .expect("values")
+            .iter()
+            .enumerate()
+        {
+            worst = worst.max((boxes[i * values + j] as f64 - w.as_f64().expect("number")).abs());
+        }
+        let s = fixture["scores"][k].as_f64().expect("score");
+        worst = worst.max((scores[i] as f64 - s).abs());
+    }
+    worst
 }

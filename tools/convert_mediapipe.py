@@ -130,26 +130,11 @@ def face_detector(tf, ort, portrait, tflite, models):
     from PIL import Image
     small = portrait.resize((128, 128), Image.BILINEAR)
     x = np.asarray(small, np.float32)[None] / 127.5 - 1.0
-    outputs = run_tflite(tf, tflite, x)
     onnx_bytes = to_onnx(tflite)
-    session = ort.InferenceSession(onnx_bytes)
-    got = dict(zip([o.name for o in session.get_outputs()],
-                   session.run(None, {session.get_inputs()[0].name: x})))
-    worst = max(np.abs(got[k] - outputs[k]).max() for k in outputs)
-    if worst > 0.01:
-        sys.exit(f"face detector: ONNX and TFLite differ by {worst}")
-    boxes = next(v for v in outputs.values() if v.size == 896 * 16).reshape(896, 16)
-    scores = next(v for v in outputs.values() if v.size == 896).ravel()
-    best = np.argsort(-scores)[:5]
-    print(f"face detector: ONNX vs TFLite within {worst:.2e}; best score "
-          f"{1 / (1 + np.exp(-scores[best[0]])):.3f}")
+    found = best_anchors(tf, ort.InferenceSession(onnx_bytes), tflite, x, 896, "face detector")
     small.save(os.path.join(ROOT, "tests/data/demo_portrait_128.png"))
-    fixture = {
-        "model": "mediapipe 0.10.21 modules/face_detection/face_detection_short_range.tflite",
-        "anchors": [int(i) for i in best],
-        "boxes": [[round(float(v), 3) for v in boxes[i]] for i in best],
-        "scores": [round(float(scores[i]), 4) for i in best],
-    }
+    fixture = {"model": "mediapipe 0.10.21 modules/face_detection/face_detection_short_range.tflite",
+               **found}
     path = os.path.join(models, "face_detection_short_range.onnx")
     open(path, "wb").write(onnx_bytes)
     json.dump(fixture, open(os.path.join(ROOT, "tests/data/face_detection_fixture.json"), "w"))
@@ -162,18 +147,8 @@ def palm(tf, ort, tflite, models):
     drawn = Image.open(os.path.join(ROOT, "tests/data/drawn_wave.png")).convert("RGB")
     small = drawn.resize((192, 192), Image.BILINEAR)
     x = np.asarray(small, np.float32)[None] / 255.0
-    outputs = run_tflite(tf, tflite, x)
     onnx_bytes = to_onnx(tflite)
-    session = ort.InferenceSession(onnx_bytes)
-    got = dict(zip([o.name for o in session.get_outputs()],
-                   session.run(None, {session.get_inputs()[0].name: x})))
-    worst = max(np.abs(got[k] - outputs[k]).max() for k in outputs)
-    if worst > 0.01:
-        sys.exit(f"palm: ONNX and TFLite differ by {worst}")
-    boxes = next(v for v in outputs.values() if v.size == 2016 * 18).reshape(2016, 18)
-    scores = next(v for v in outputs.values() if v.size == 2016).ravel()
-    best = np.argsort(-scores)[:5]
-    print(f"palm: ONNX vs TFLite within {worst:.2e}; best score {1 / (1 + np.exp(-scores[best[0]])):.3f}")
+    found_anchors = best_anchors(tf, ort.InferenceSession(onnx_bytes), tflite, x, 2016, "palm")
     with mediapipe.solutions.hands.Hands(static_image_mode=True, max_num_hands=2) as hands:
         found = hands.process(np.asarray(drawn))
     hands_found = [[[round(l.x * drawn.width, 2), round(l.y * drawn.height, 2)] for l in h.landmark]
@@ -182,9 +157,7 @@ def palm(tf, ort, tflite, models):
     small.save(os.path.join(ROOT, "tests/data/drawn_wave_192.png"))
     fixture = {
         "model": "mediapipe 0.10.21 modules/palm_detection/palm_detection_full.tflite",
-        "anchors": [int(i) for i in best],
-        "boxes": [[round(float(v), 3) for v in boxes[i]] for i in best],
-        "scores": [round(float(scores[i]), 4) for i in best],
+        **found_anchors,
         "pipeline": "mediapipe.solutions.hands.Hands(static_image_mode=True, max_num_hands=2)",
         "hands": hands_found,
     }
@@ -243,18 +216,8 @@ def detector(tf, ort, portrait, camera, tflite, models):
     for name, photo in [("demo_portrait", portrait), ("camera", camera)]:
         small = photo.resize((224, 224), Image.BILINEAR)
         x = np.asarray(small, np.float32)[None] / 127.5 - 1.0
-        outputs = run_tflite(tf, tflite, x)
-        got = dict(zip([o.name for o in session.get_outputs()],
-                       session.run(None, {session.get_inputs()[0].name: x})))
-        boxes = next(v for v in outputs.values() if v.size == 2254 * 12).reshape(2254, 12)
-        scores = next(v for v in outputs.values() if v.size == 2254).ravel()
-        worst = max(np.abs(got[k] - outputs[k]).max() for k in outputs)
-        # Box values run to ~200 input pixels; the densified weights are the sparse ones exactly.
-        if worst > 0.01:
-            sys.exit(f"detector ({name}): ONNX and TFLite differ by {worst}")
-        best = np.argsort(-scores)[:5]
-        print(f"detector ({name}): ONNX vs TFLite within {worst:.2e}; best score "
-              f"{1 / (1 + np.exp(-scores[best[0]])):.3f} at anchor {best[0]}")
+        # Against the original (sparse) model: the densified weights must be its own.
+        found_anchors = best_anchors(tf, session, tflite, x, 2254, f"detector ({name})")
         with mediapipe.solutions.pose.Pose(static_image_mode=True, model_complexity=1) as pose:
             found = pose.process(np.asarray(photo))
         if found.pose_landmarks is None:
@@ -266,9 +229,7 @@ def detector(tf, ort, portrait, camera, tflite, models):
         }
         if name == "demo_portrait":
             small.save(os.path.join(ROOT, "tests/data/demo_portrait_224.png"))
-            entry["anchors"] = [int(i) for i in best]
-            entry["boxes"] = [[round(float(v), 3) for v in boxes[i]] for i in best]
-            entry["scores"] = [round(float(scores[i]), 4) for i in best]
+            entry.update(found_anchors)
         fixture[name] = entry
     path = os.path.join(models, "pose_detection.onnx")
     open(path, "wb").write(onnx_bytes)
@@ -420,6 +381,28 @@ def face(tf, ort, image, tflite, models):
     }
     json.dump(fixture, open(os.path.join(ROOT, "tests/data/face_landmark_fixture.json"), "w"))
     print(f"wrote {path} ({len(onnx_bytes) / 1e6:.1f} MB) and the face fixture")
+
+
+def best_anchors(tf, session, tflite, x, anchors, what):
+    """An SSD detector's outputs on `x` from the TFLite interpreter and from our ONNX `session`,
+    checked to agree (box values run to ~200 input pixels); its five best anchors' values as
+    fixture entries."""
+    outputs = run_tflite(tf, tflite, x)
+    got = dict(zip([o.name for o in session.get_outputs()],
+                   session.run(None, {session.get_inputs()[0].name: x})))
+    worst = max(np.abs(got[k] - outputs[k]).max() for k in outputs)
+    if worst > 0.01:
+        sys.exit(f"{what}: ONNX and TFLite differ by {worst}")
+    scores = next(v for v in outputs.values() if v.size == anchors).ravel()
+    boxes = next(v for v in outputs.values() if v.size > anchors).reshape(anchors, -1)
+    best = np.argsort(-scores)[:5]
+    print(f"{what}: ONNX vs TFLite within {worst:.2e}; best score "
+          f"{1 / (1 + np.exp(-scores[best[0]])):.3f} at anchor {best[0]}")
+    return {
+        "anchors": [int(i) for i in best],
+        "boxes": [[round(float(v), 3) for v in boxes[i]] for i in best],
+        "scores": [round(float(scores[i]), 4) for i in best],
+    }
 
 
 def to_onnx(tflite):

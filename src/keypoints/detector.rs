@@ -11,8 +11,7 @@ use std::path::Path;
 use glam::Vec2;
 
 use super::Roi;
-use super::model::SquareModel;
-use super::ssd::{Detection, Ssd, SsdLayout};
+use super::ssd::{Detection, SsdLayout, SsdModel};
 use crate::onnx::{OnnxError, OnnxRuntime};
 use crate::reconstruct::SourceImage;
 
@@ -38,8 +37,7 @@ pub struct PersonDetection {
 }
 
 pub struct PoseDetector {
-    model: SquareModel,
-    ssd: Ssd,
+    model: SsdModel,
 }
 
 impl PoseDetector {
@@ -48,53 +46,36 @@ impl PoseDetector {
     }
 
     pub fn load_from(runtime: &OnnxRuntime, path: &Path) -> Result<Self, OnnxError> {
-        let what = "MediaPipe's pose detector";
+        // Five layers of strides 8, 16, 32, 32, 32, two anchors per cell and layer.
+        let layout = SsdLayout {
+            input: DETECTOR_INPUT,
+            grids: &[(8, 2), (16, 2), (32, 6)],
+            keypoints: 4,
+        };
         Ok(Self {
-            model: SquareModel::load(runtime, path, what, 2, DETECTOR_INPUT)?,
-            // Five layers of strides 8, 16, 32, 32, 32, two anchors per cell and layer.
-            ssd: Ssd::new(SsdLayout {
-                input: DETECTOR_INPUT,
-                grids: &[(8, 2), (16, 2), (32, 6)],
-                keypoints: 4,
-            }),
+            model: SsdModel::load(runtime, path, "MediaPipe's pose detector", layout, true)?,
         })
     }
 
     /// The raw outputs for a 224² RGB input in [-1, 1]: per anchor the 12 values and the score
     /// logit.
     pub fn run(&mut self, input: &[f32]) -> Result<(Vec<f32>, Vec<f32>), OnnxError> {
-        let outputs = self.model.run(input)?;
-        let (anchors, values) = (self.ssd.anchors(), self.ssd.values());
-        let boxes = self.model.output(&outputs, anchors * values, "box")?;
-        let scores = self.model.output(&outputs, anchors, "score")?;
-        Ok((boxes.to_vec(), scores.to_vec()))
+        self.model.run(input)
     }
 
     /// The most confident person in raw outputs, in [0, 1] of the input.
     pub fn decode(&self, boxes: &[f32], logits: &[f32]) -> Option<Detection> {
-        self.ssd.decode(boxes, logits, MIN_SCORE, 1).pop()
+        self.model.decode(boxes, logits, MIN_SCORE, 1).pop()
     }
 
     /// The most confident person on a square source image, `None` if nobody scores 0.5.
     pub fn detect(&mut self, source: &SourceImage) -> Result<Option<PersonDetection>, OnnxError> {
-        let side = source.size as f32;
-        let input: Vec<f32> = Roi::whole(side)
-            .sample(source, DETECTOR_INPUT)
-            .iter()
-            .map(|v| 2.0 * v - 1.0)
-            .collect();
-        let (boxes, scores) = self.run(&input)?;
-        Ok(self.decode(&boxes, &scores).map(|d| {
-            let k = |i: usize| d.keypoints[i] * side;
-            let keypoints = [k(0), k(1), k(2), k(3)];
+        Ok(self.model.detect(source, MIN_SCORE, 1)?.pop().map(|d| {
+            let k = &d.keypoints;
             PersonDetection {
                 score: d.score,
-                keypoints,
-                roi: Roi::upright(
-                    keypoints[0],
-                    CROP_SCALE * 2.0 * keypoints[0].distance(keypoints[1]),
-                    keypoints[1] - keypoints[0],
-                ),
+                keypoints: [k[0], k[1], k[2], k[3]],
+                roi: Roi::upright(k[0], CROP_SCALE * 2.0 * k[0].distance(k[1]), k[1] - k[0]),
             }
         }))
     }

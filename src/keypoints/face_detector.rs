@@ -6,11 +6,8 @@
 
 use std::path::Path;
 
-use glam::Vec2;
-
 use super::Roi;
-use super::model::SquareModel;
-use super::ssd::{Detection, Ssd, SsdLayout};
+use super::ssd::{Detection, SsdLayout, SsdModel};
 use crate::onnx::{OnnxError, OnnxRuntime};
 use crate::reconstruct::SourceImage;
 
@@ -24,8 +21,7 @@ const MIN_SCORE: f32 = 0.5;
 const CROP_SCALE: f32 = 1.5;
 
 pub struct FaceDetector {
-    model: SquareModel,
-    ssd: Ssd,
+    model: SsdModel,
 }
 
 impl FaceDetector {
@@ -34,46 +30,34 @@ impl FaceDetector {
     }
 
     pub fn load_from(runtime: &OnnxRuntime, path: &Path) -> Result<Self, OnnxError> {
-        let what = "MediaPipe's face detector";
+        // Four layers of strides 8, 16, 16, 16, two anchors per cell and layer.
+        let layout = SsdLayout {
+            input: FACE_DETECTOR_INPUT,
+            grids: &[(8, 2), (16, 6)],
+            keypoints: 6,
+        };
         Ok(Self {
-            model: SquareModel::load(runtime, path, what, 2, FACE_DETECTOR_INPUT)?,
-            // Four layers of strides 8, 16, 16, 16, two anchors per cell and layer.
-            ssd: Ssd::new(SsdLayout {
-                input: FACE_DETECTOR_INPUT,
-                grids: &[(8, 2), (16, 6)],
-                keypoints: 6,
-            }),
+            model: SsdModel::load(runtime, path, "MediaPipe's face detector", layout, true)?,
         })
     }
 
     /// The raw outputs for a 128² RGB input in [-1, 1]: per anchor the 16 values and the score
     /// logit.
     pub fn run(&mut self, input: &[f32]) -> Result<(Vec<f32>, Vec<f32>), OnnxError> {
-        let outputs = self.model.run(input)?;
-        let (anchors, values) = (self.ssd.anchors(), self.ssd.values());
-        let boxes = self.model.output(&outputs, anchors * values, "box")?;
-        let scores = self.model.output(&outputs, anchors, "score")?;
-        Ok((boxes.to_vec(), scores.to_vec()))
+        self.model.run(input)
     }
 
     /// The most confident face in raw outputs, in [0, 1] of the input.
     pub fn decode(&self, boxes: &[f32], logits: &[f32]) -> Option<Detection> {
-        self.ssd.decode(boxes, logits, MIN_SCORE, 1).pop()
+        self.model.decode(boxes, logits, MIN_SCORE, 1).pop()
     }
 
     /// The face landmark model's crop around the most confident face on a square source image.
     pub fn detect(&mut self, source: &SourceImage) -> Result<Option<Roi>, OnnxError> {
-        let side = source.size as f32;
-        let input: Vec<f32> = Roi::whole(side)
-            .sample(source, FACE_DETECTOR_INPUT)
-            .iter()
-            .map(|v| 2.0 * v - 1.0)
-            .collect();
-        let (boxes, scores) = self.run(&input)?;
-        Ok(self.decode(&boxes, &scores).map(|d| {
-            let [lo, hi] = d.bounds.map(|b| b * side);
+        Ok(self.model.detect(source, MIN_SCORE, 1)?.pop().map(|d| {
+            let [lo, hi] = d.bounds;
             // The subject's right eye (on the image's left), then the left.
-            let across: Vec2 = (d.keypoints[1] - d.keypoints[0]) * side;
+            let across = d.keypoints[1] - d.keypoints[0];
             Roi {
                 centre: 0.5 * (lo + hi),
                 side: CROP_SCALE * (hi - lo).max_element(),

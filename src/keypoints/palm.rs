@@ -9,8 +9,7 @@ use std::path::Path;
 use glam::Vec2;
 
 use super::Roi;
-use super::model::SquareModel;
-use super::ssd::{Detection, Ssd, SsdLayout};
+use super::ssd::{Detection, SsdLayout, SsdModel};
 use crate::onnx::{OnnxError, OnnxRuntime};
 use crate::reconstruct::SourceImage;
 
@@ -38,8 +37,7 @@ pub struct PalmDetection {
 }
 
 pub struct PalmDetector {
-    model: SquareModel,
-    ssd: Ssd,
+    model: SsdModel,
 }
 
 impl PalmDetector {
@@ -48,44 +46,37 @@ impl PalmDetector {
     }
 
     pub fn load_from(runtime: &OnnxRuntime, path: &Path) -> Result<Self, OnnxError> {
-        let what = "MediaPipe's palm detector";
+        // Four layers of strides 8, 16, 16, 16, two anchors per cell and layer.
+        let layout = SsdLayout {
+            input: PALM_INPUT,
+            grids: &[(8, 2), (16, 6)],
+            keypoints: 7,
+        };
         Ok(Self {
-            model: SquareModel::load(runtime, path, what, 2, PALM_INPUT)?,
-            // Four layers of strides 8, 16, 16, 16, two anchors per cell and layer.
-            ssd: Ssd::new(SsdLayout {
-                input: PALM_INPUT,
-                grids: &[(8, 2), (16, 6)],
-                keypoints: 7,
-            }),
+            model: SsdModel::load(runtime, path, "MediaPipe's palm detector", layout, false)?,
         })
     }
 
     /// The raw outputs for a 192² RGB input in [0, 1]: per anchor the 18 values and the score
     /// logit.
     pub fn run(&mut self, input: &[f32]) -> Result<(Vec<f32>, Vec<f32>), OnnxError> {
-        let outputs = self.model.run(input)?;
-        let (anchors, values) = (self.ssd.anchors(), self.ssd.values());
-        let boxes = self.model.output(&outputs, anchors * values, "box")?;
-        let scores = self.model.output(&outputs, anchors, "score")?;
-        Ok((boxes.to_vec(), scores.to_vec()))
+        self.model.run(input)
     }
 
     /// The palms in raw outputs, best first, in [0, 1] of the input.
     pub fn decode(&self, boxes: &[f32], logits: &[f32]) -> Vec<Detection> {
-        self.ssd.decode(boxes, logits, MIN_SCORE, MAX_PALMS)
+        self.model.decode(boxes, logits, MIN_SCORE, MAX_PALMS)
     }
 
     /// The palms on a square source image, best first.
     pub fn detect(&mut self, source: &SourceImage) -> Result<Vec<PalmDetection>, OnnxError> {
-        let side = source.size as f32;
-        let input = Roi::whole(side).sample(source, PALM_INPUT);
-        let (boxes, scores) = self.run(&input)?;
         Ok(self
-            .decode(&boxes, &scores)
+            .model
+            .detect(source, MIN_SCORE, MAX_PALMS)?
             .into_iter()
             .map(|d| {
-                let [lo, hi] = d.bounds.map(|b| b * side);
-                let (wrist, knuckle) = (d.keypoints[0] * side, d.keypoints[2] * side);
+                let [lo, hi] = d.bounds;
+                let (wrist, knuckle) = (d.keypoints[0], d.keypoints[2]);
                 let size = hi - lo;
                 let upright = Roi::upright(0.5 * (lo + hi), 1.0, knuckle - wrist);
                 // Half the box's height along the crop's up, which is −y in the crop's frame.

@@ -5,7 +5,14 @@
 //! `WEIGHTED`): each cluster of boxes overlapping its best one by IoU > 0.3 becomes one
 //! detection, its box and keypoints averaged by score.
 
+use std::path::Path;
+
 use glam::Vec2;
+
+use super::Roi;
+use super::model::SquareModel;
+use crate::onnx::{OnnxError, OnnxRuntime};
+use crate::reconstruct::SourceImage;
 
 /// Boxes overlapping a cluster's best one by more than this (IoU) join the cluster.
 const NMS_OVERLAP: f32 = 0.3;
@@ -109,6 +116,75 @@ impl Ssd {
             });
         }
         out
+    }
+}
+
+/// A detector model with its layout: the whole photo in, detections out.
+pub(super) struct SsdModel {
+    model: SquareModel,
+    ssd: Ssd,
+    /// Whether the model takes RGB in [-1, 1] (else [0, 1]).
+    signed_input: bool,
+}
+
+impl SsdModel {
+    /// `what` names the model in errors.
+    pub fn load(
+        runtime: &OnnxRuntime,
+        path: &Path,
+        what: &str,
+        layout: SsdLayout,
+        signed_input: bool,
+    ) -> Result<Self, OnnxError> {
+        Ok(Self {
+            model: SquareModel::load(runtime, path, what, 2, layout.input)?,
+            ssd: Ssd::new(layout),
+            signed_input,
+        })
+    }
+
+    /// The raw outputs for an input of the model's side and range: per anchor the box and
+    /// keypoint values, and the score logits.
+    pub fn run(&mut self, input: &[f32]) -> Result<(Vec<f32>, Vec<f32>), OnnxError> {
+        let outputs = self.model.run(input)?;
+        let (anchors, values) = (self.ssd.anchors(), self.ssd.values());
+        let boxes = self.model.output(&outputs, anchors * values, "box")?;
+        let scores = self.model.output(&outputs, anchors, "score")?;
+        Ok((boxes.to_vec(), scores.to_vec()))
+    }
+
+    pub fn decode(
+        &self,
+        boxes: &[f32],
+        logits: &[f32],
+        min_score: f32,
+        max: usize,
+    ) -> Vec<Detection> {
+        self.ssd.decode(boxes, logits, min_score, max)
+    }
+
+    /// Up to `max` detections on a square source image, in its pixels, best first.
+    pub fn detect(
+        &mut self,
+        source: &SourceImage,
+        min_score: f32,
+        max: usize,
+    ) -> Result<Vec<Detection>, OnnxError> {
+        let side = source.size as f32;
+        let mut input = Roi::whole(side).sample(source, self.ssd.layout.input);
+        if self.signed_input {
+            input.iter_mut().for_each(|v| *v = 2.0 * *v - 1.0);
+        }
+        let (boxes, scores) = self.run(&input)?;
+        Ok(self
+            .decode(&boxes, &scores, min_score, max)
+            .into_iter()
+            .map(|d| Detection {
+                score: d.score,
+                bounds: d.bounds.map(|b| b * side),
+                keypoints: d.keypoints.iter().map(|k| *k * side).collect(),
+            })
+            .collect())
     }
 }
 
