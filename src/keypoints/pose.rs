@@ -1,8 +1,8 @@
 //! 2D body keypoints and a person mask from MediaPipe's pose landmark model (`pose_landmark_full`).
 //!
-//! The model sees a crop of the photo at 256² (RGB in [0, 1], NHWC, as MediaPipe feeds it):
-//! the one the pose detector places around the person ([`super::PoseDetector`]), or, when it
-//! finds nobody, the whole photo. It returns 39 landmarks (33 body points and 6 auxiliary) in
+//! The model sees a crop of the photo at 256² (RGB in [0, 1], NHWC, as MediaPipe feeds it): the
+//! whole photo, or the crop the pose detector places around the person ([`super::PoseDetector`];
+//! `Landmarkers::pose` runs both and keeps the answer that sees more of the body). It returns 39 landmarks (33 body points and 6 auxiliary) in
 //! input pixels with visibility and presence logits, a pose presence score and 256² segmentation
 //! logits, all in the crop's frame.
 

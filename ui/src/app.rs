@@ -1366,8 +1366,8 @@ fn guava_worker(
             photo.display()
         )
     })?;
-    *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the pose model";
-    // Only for a person mask when the photo has no alpha.
+    *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the keypoint models";
+    // Only the pose detector and pose model are used: a person mask when the photo has no alpha.
     let mut landmarkers = guava::onnx::OnnxRuntime::load()
         .ok()
         .and_then(|rt| guava::keypoints::Landmarkers::load(rt).ok());
