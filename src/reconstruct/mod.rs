@@ -358,20 +358,16 @@ pub fn reconstruct_photo_file(
                     "fitting a photo needs the pose model, which did not load".into(),
                 )
             })?;
-            if k.pose.presence < 0.5 {
-                return Err(ReconstructError::Image {
-                    file,
-                    problem: format!(
-                        "the pose model finds no person (presence {:.2}); give the photo's tracking file",
-                        k.pose.presence
-                    ),
-                });
-            }
             let models = landmarkers.expect("the keypoints came from them");
             let (view, report) = crate::fit::fit_detections(body, k, &mut models.face, image.size)
                 .map_err(|e| ReconstructError::Image {
                     file: file.clone(),
-                    problem: e.to_string(),
+                    problem: match e {
+                        crate::fit::FitError::NoPerson { .. } => {
+                            format!("{e}; give the photo's tracking file")
+                        }
+                        e => e.to_string(),
+                    },
                 })?;
             (view, Some(report))
         }
