@@ -477,3 +477,45 @@ fn thread_layouts_agree_on_an_animated_avatar() {
         assert!(d.max_abs <= 1e-5, "{p} pixels per thread: {d:?}");
     }
 }
+
+/// Whether a photo carries its own mask is read from its header: RGBA and grey-alpha PNGs have
+/// one, RGB PNG and JPEG do not, and a missing or unreadable file is an error that names it.
+#[test]
+fn a_photos_alpha_is_known_before_decoding() {
+    let dir = std::env::temp_dir().join(format!("guava-alpha-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let rgba = dir.join("rgba.png");
+    image::RgbaImage::new(8, 8).save(&rgba).expect("png");
+    let grey_alpha = dir.join("la.png");
+    image::GrayAlphaImage::new(8, 8)
+        .save(&grey_alpha)
+        .expect("png");
+    let rgb = dir.join("rgb.png");
+    image::RgbImage::new(8, 8).save(&rgb).expect("png");
+    let jpeg = dir.join("rgb.jpg");
+    image::RgbImage::new(8, 8).save(&jpeg).expect("jpeg");
+    for (path, alpha) in [
+        (&rgba, true),
+        (&grey_alpha, true),
+        (&rgb, false),
+        (&jpeg, false),
+    ] {
+        assert_eq!(
+            SourceImage::has_alpha(path).expect("readable"),
+            alpha,
+            "{path:?}"
+        );
+    }
+    let text = dir.join("notes.png");
+    std::fs::write(&text, "not an image").expect("write");
+    for bad in [dir.join("missing.png"), text] {
+        let e = SourceImage::has_alpha(&bad).expect_err("unreadable");
+        let name = bad
+            .file_name()
+            .expect("name")
+            .to_string_lossy()
+            .into_owned();
+        assert!(e.to_string().contains(&name), "{e}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -29,6 +29,22 @@ impl SourceImage {
         Self::load_at(path, SOURCE_SIZE)
     }
 
+    /// Whether the photo at `path` has an alpha channel (its person mask), read from its header
+    /// without decoding the pixels: a photo with one needs no pose model for a mask.
+    pub fn has_alpha(path: &Path) -> Result<bool, ReconstructError> {
+        use image::ImageDecoder;
+        let fail = |e: &dyn std::fmt::Display| ReconstructError::Image {
+            file: path.display().to_string(),
+            problem: e.to_string(),
+        };
+        let reader = image::ImageReader::open(path)
+            .map_err(|e| fail(&e))?
+            .with_guessed_format()
+            .map_err(|e| fail(&e))?;
+        let decoder = reader.into_decoder().map_err(|e| fail(&e))?;
+        Ok(decoder.color_type().has_alpha())
+    }
+
     /// [`Self::load`] at `size`².
     pub fn load_at(path: &Path, size: u32) -> Result<Self, ReconstructError> {
         let file = path.display().to_string();

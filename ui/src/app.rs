@@ -1366,11 +1366,16 @@ fn guava_worker(
             photo.display()
         )
     })?;
-    *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the keypoint models";
-    // Only the pose detector and pose model are used: a person mask when the photo has no alpha.
-    let mut landmarkers = guava::onnx::OnnxRuntime::load()
-        .ok()
-        .and_then(|rt| guava::keypoints::Landmarkers::load(rt).ok());
+    // The keypoint models only mask a photo without alpha (the tracking comes with the photo).
+    let has_alpha = guava::reconstruct::SourceImage::has_alpha(photo).map_err(|e| e.to_string())?;
+    let mut landmarkers = if has_alpha {
+        None
+    } else {
+        *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the keypoint models";
+        guava::onnx::OnnxRuntime::load()
+            .ok()
+            .and_then(|rt| guava::keypoints::Landmarkers::load(rt).ok())
+    };
     let mut models = networks.lock().unwrap_or_else(|e| e.into_inner());
     let uv = uv_map(body, models.dims.uv as u32);
     let (avatar, r, view) = reconstruct_guava_file(
