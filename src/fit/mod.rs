@@ -500,19 +500,19 @@ pub fn fit_keypoints(
         BodyPoint::Surface(l) => Some(l),
         BodyPoint::Joint(_) => None,
     });
-    // Each iris with its pupil and eye joint; a body without them does not fit the gaze.
-    let irises: Vec<(&Iris, Landmark, usize)> = match face {
+    // Each iris with its eye joint, and its pupil on the body; a body without them does not fit
+    // the gaze.
+    let (irises, pupils): (Vec<(&Iris, usize)>, Vec<Landmark>) = match face {
         Some(_) => input
             .irises
             .iter()
             .filter_map(|i| {
                 let joint = body.joint_index(gaze::eye_joint(i.side))?;
-                Some((i, gaze::pupil(body, i.side)?, joint))
+                Some(((i, joint), gaze::pupil(body, i.side)?))
             })
-            .collect(),
-        None => Vec::new(),
+            .unzip(),
+        None => Default::default(),
     };
-    let pupils: Vec<Landmark> = irises.iter().map(|(_, p, _)| p.clone()).collect();
     let first_pupil = body.landmarks.len() + face_points.len() + tips.clone().count();
     let mut poser = PointPoser::new(
         body,
@@ -652,7 +652,7 @@ pub fn fit_keypoints(
         let eye_span =
             landmarks.points[FACE_EYE_CORNERS.0].distance(landmarks.points[FACE_EYE_CORNERS.1]);
         let mut unknowns = Vec::new();
-        for (k, &(iris, _, j)) in irises.iter().enumerate() {
+        for (k, &(iris, j)) in irises.iter().enumerate() {
             stage.observations.push((
                 Target::Point(first_pupil + k),
                 iris.centre,
@@ -677,15 +677,15 @@ pub fn fit_keypoints(
         let mut body_only = with_gaze.clone();
         body_only.feature_offsets = Default::default();
         gaze_report = Some(GazeFitReport {
-            sides: irises.iter().map(|(i, _, _)| i.side).collect(),
+            sides: irises.iter().map(|(i, _)| i.side).collect(),
             rms_before_px,
             rms_px: stage.rms(&with_gaze, range.clone()),
-            observed: irises.iter().map(|(i, _, _)| i.centre).collect(),
+            observed: irises.iter().map(|(i, _)| i.centre).collect(),
             fitted: stage.projected(&body_only, range),
             pupils,
             turn_rad: irises
                 .iter()
-                .map(|&(_, _, j)| with_gaze.pose.rotations[j].length())
+                .map(|&(_, j)| with_gaze.pose.rotations[j].length())
                 .collect(),
         });
         (stage.observations, stage.features) = others;

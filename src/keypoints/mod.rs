@@ -186,11 +186,11 @@ impl Landmarkers {
         pose: &PoseKeypoints,
         hands: &mut Vec<HandLandmarks>,
     ) -> Result<(), OnnxError> {
+        let wrist = |side| pose.point(if side == Side::Left { 15 } else { 16 }).0;
         for palm in self.palm.detect(source)? {
             if hands.iter().any(|h| h.roi.covers(palm.knuckle)) {
                 continue;
             }
-            let wrist = |side| pose.point(if side == Side::Left { 15 } else { 16 }).0;
             let side = [Side::Left, Side::Right]
                 .into_iter()
                 .filter(|&s| hands.iter().all(|h| h.side != s))

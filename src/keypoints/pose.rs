@@ -2,9 +2,9 @@
 //!
 //! The model sees a crop of the photo at 256² (RGB in [0, 1], NHWC, as MediaPipe feeds it): the
 //! whole photo, or the crop the pose detector places around the person ([`super::PoseDetector`];
-//! `Landmarkers::pose` runs both and keeps the answer that sees more of the body). It returns 39 landmarks (33 body points and 6 auxiliary) in
-//! input pixels with visibility and presence logits, a pose presence score and 256² segmentation
-//! logits, all in the crop's frame.
+//! `Landmarkers::pose` runs both and keeps the answer that sees more of the body). It returns 39
+//! landmarks (33 body points and 6 auxiliary) in input pixels with visibility and presence
+//! logits, a pose presence score and 256² segmentation logits, all in the crop's frame.
 
 use std::path::Path;
 
@@ -81,14 +81,13 @@ impl PoseKeypoints {
 
     /// The mask (bilinear) over a `side`² source image; outside the crop nobody.
     pub fn mask_at(&self, side: usize) -> Vec<f32> {
-        let n = POSE_INPUT as f32;
         (0..side * side)
             .map(|i| {
                 let pixel = Vec2::new((i % side) as f32 + 0.5, (i / side) as f32 + 0.5);
-                let p = self.roi.to_input(pixel, POSE_INPUT);
-                if p.cmplt(Vec2::ZERO).any() || p.cmpgt(Vec2::splat(n)).any() {
+                if !self.roi.covers(pixel) {
                     return 0.0;
                 }
+                let p = self.roi.to_input(pixel, POSE_INPUT);
                 bilinear_clamped(POSE_INPUT, p.x - 0.5, p.y - 0.5, |k| self.mask[k])
             })
             .collect()

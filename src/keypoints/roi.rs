@@ -143,7 +143,7 @@ impl Roi {
         let d = b - a;
         Self {
             centre: 0.5 * (a + b),
-            side: scale * d.x.abs().max(d.y.abs()),
+            side: scale * d.abs().max_element(),
             angle: d.y.atan2(d.x),
         }
     }

@@ -78,34 +78,33 @@ impl Ssd {
     ) -> Vec<Detection> {
         let (n, values) = (self.layout.input as f32, self.values());
         let score = |i: usize| 1.0 / (1.0 + (-logits[i].clamp(-100.0, 100.0)).exp());
-        let mut candidates: Vec<(f32, Detection)> = (0..self.anchors.len())
+        let mut candidates: Vec<Detection> = (0..self.anchors.len())
             .filter(|&i| logits[i].is_finite() && score(i) >= min_score)
             .map(|i| {
                 let v = &boxes[i * values..(i + 1) * values];
                 let at = |k: usize| self.anchors[i] + Vec2::new(v[k], v[k + 1]) / n;
                 let half = Vec2::new(v[2], v[3]) / n / 2.0;
                 let centre = at(0);
-                let detection = Detection {
+                Detection {
                     score: score(i),
                     bounds: [centre - half, centre + half],
                     keypoints: (0..self.layout.keypoints).map(|k| at(4 + 2 * k)).collect(),
-                };
-                (score(i), detection)
+                }
             })
             .collect();
-        candidates.sort_by(|a, b| b.0.total_cmp(&a.0));
+        candidates.sort_by(|a, b| b.score.total_cmp(&a.score));
         let mut out = Vec::new();
-        while let Some((_, best)) = candidates.first().cloned() {
+        while let Some(best) = candidates.first().cloned() {
             if out.len() == max {
                 break;
             }
             let (cluster, rest): (Vec<_>, Vec<_>) = candidates
                 .into_iter()
-                .partition(|(_, d)| iou(d.bounds, best.bounds) > NMS_OVERLAP);
+                .partition(|d| iou(d.bounds, best.bounds) > NMS_OVERLAP);
             candidates = rest;
-            let weight: f32 = cluster.iter().map(|(s, _)| s).sum();
+            let weight: f32 = cluster.iter().map(|d| d.score).sum();
             let mean = |f: &dyn Fn(&Detection) -> Vec2| {
-                cluster.iter().map(|(s, d)| *s * f(d)).sum::<Vec2>() / weight
+                cluster.iter().map(|d| d.score * f(d)).sum::<Vec2>() / weight
             };
             out.push(Detection {
                 score: best.score,
