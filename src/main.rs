@@ -80,7 +80,8 @@ enum Command {
         #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
         yaw: f32,
     },
-    /// Default reconstruction (no GUAVA weights) of a photo with its tracking file into an avatar.
+    /// Reconstruct a photo into an avatar: the default reconstruction, or GUAVA mode with
+    /// --guava-models and --ehm; the pose and camera from its tracking file, or fitted.
     Reconstruct {
         /// PNG or JPEG; its alpha channel, if any, is the person mask.
         #[arg(long)]
@@ -100,16 +101,17 @@ enum Command {
         #[arg(long)]
         keypoint_models: Option<PathBuf>,
         /// GUAVA mode: the folder of GUAVA's networks as exported by
-        /// tools/export_guava_onnx.py (needs --ehm and a tracking file of that body).
-        #[arg(long, requires = "ehm", conflicts_with = "fit")]
+        /// tools/export_guava_onnx.py (needs --ehm; without a tracking file of that body, EHM is
+        /// fitted to the keypoints).
+        #[arg(long, requires = "ehm")]
         guava_models: Option<PathBuf>,
         /// GUAVA mode: the EHM body (tools/convert_ehm.py).
         #[arg(long, requires = "guava_models")]
         ehm: Option<PathBuf>,
     },
-    /// Fit the default body's pose, shape, expression and fingers and GUAVA's camera to a photo's
-    /// body, face and hand keypoints (MediaPipe's models through ONNX Runtime) and write them as a
-    /// tracking file.
+    /// Fit the default body's (or, with --ehm, GUAVA's body's) pose, shape, expression and fingers
+    /// and GUAVA's camera to a photo's body, face and hand keypoints (MediaPipe's models through
+    /// ONNX Runtime) and write them as a tracking file.
     Fit {
         #[arg(long)]
         image: PathBuf,
@@ -123,6 +125,9 @@ enum Command {
         /// inputs and outputs as assets/models/).
         #[arg(long)]
         keypoint_models: Option<PathBuf>,
+        /// Fit this EHM body (tools/convert_ehm.py; GUAVA mode's) instead of the default body.
+        #[arg(long)]
+        ehm: Option<PathBuf>,
     },
     /// Benchmarks (print a table).
     Bench {
@@ -240,29 +245,36 @@ fn run(cli: Cli) -> Result<()> {
             keypoint_models,
             guava_models,
             ehm,
-        } => match (guava_models, ehm) {
-            (Some(models), Some(ehm)) => reconstruct_guava(
-                &image,
-                tracking.as_deref(),
-                &models,
-                &ehm,
-                &out,
-                keypoint_models.as_deref(),
-            ),
-            _ => reconstruct(
-                &image,
-                tracking.as_deref(),
-                force_fit,
-                &out,
-                keypoint_models.as_deref(),
-            ),
-        },
+        } => {
+            use guava::reconstruct::{Tracked, tracking_beside};
+            let beside = tracking_beside(&image);
+            let tracked = match tracking.as_deref() {
+                _ if force_fit => Tracked::Fit,
+                Some(path) => Tracked::File(path),
+                None if beside.is_file() => Tracked::File(&beside),
+                None => Tracked::Fit,
+            };
+            let keypoint_models = keypoint_models.as_deref();
+            match (guava_models, ehm) {
+                (Some(models), Some(ehm)) => {
+                    reconstruct_guava(&image, tracked, &models, &ehm, &out, keypoint_models)
+                }
+                _ => reconstruct(&image, tracked, &out, keypoint_models),
+            }
+        }
         Command::Fit {
             image,
             out,
             overlay,
             keypoint_models,
-        } => fit(&image, &out, overlay.as_deref(), keypoint_models.as_deref()),
+            ehm,
+        } => fit(
+            &image,
+            &out,
+            overlay.as_deref(),
+            keypoint_models.as_deref(),
+            ehm.as_deref(),
+        ),
         Command::Motion { file, out, ehm } => motion(&file, out.as_deref(), ehm.as_deref()),
         Command::Bench { which } => match which {
             Bench::Splat(args) => guava::bench::splat(&args),
@@ -381,36 +393,36 @@ fn print_fit(f: &guava::fit::FitReport) {
     }
 }
 
+/// The keypoint models for a reconstruction: needed to fit, else optional (they mask a photo
+/// without alpha; `without` says what happens without them).
+fn keypoint_models_for(
+    tracked: &guava::reconstruct::Tracked,
+    models: Option<&Path>,
+    without: &str,
+) -> Result<Option<guava::keypoints::Landmarkers>> {
+    match landmarkers(models) {
+        Ok(m) => Ok(Some(m)),
+        Err(e) if matches!(tracked, guava::reconstruct::Tracked::Fit) => {
+            Err(e.context("fitting the photo needs the keypoint models"))
+        }
+        Err(e) => {
+            eprintln!("guava: keypoint models not available ({e:#}); {without}");
+            Ok(None)
+        }
+    }
+}
+
 fn reconstruct(
     image: &Path,
-    tracking: Option<&Path>,
-    fit: bool,
+    tracked: guava::reconstruct::Tracked,
     out: &Path,
     models: Option<&Path>,
 ) -> Result<()> {
-    use guava::reconstruct::{
-        DEFAULT_UV_SIZE, MaskSource, Tracked, UvMap, reconstruct_photo_file, tracking_beside,
-    };
+    use guava::reconstruct::{DEFAULT_UV_SIZE, MaskSource, UvMap, reconstruct_photo_file};
     let body = guava::body::BodyModel::default_body()?;
     let uv = UvMap::for_body(&body, DEFAULT_UV_SIZE);
-    let beside = tracking_beside(image);
-    let tracked = match tracking {
-        _ if fit => Tracked::Fit,
-        Some(path) => Tracked::File(path),
-        None if beside.is_file() => Tracked::File(&beside),
-        None => Tracked::Fit,
-    };
-    // The pose model gives the mask of a photo without alpha, and the fit; optional otherwise.
-    let mut model = match (&tracked, landmarkers(models)) {
-        (_, Ok(m)) => Some(m),
-        (Tracked::Fit, Err(e)) => return Err(e.context("fitting the photo needs the pose model")),
-        (Tracked::File(_) | Tracked::Given(_), Err(e)) => {
-            eprintln!(
-                "guava: pose model not available ({e:#}); a photo without alpha is masked by the body's silhouette"
-            );
-            None
-        }
-    };
+    let without = "a photo without alpha is masked by the body's silhouette";
+    let mut model = keypoint_models_for(&tracked, models, without)?;
     let (avatar, report, _) =
         reconstruct_photo_file(&body, &uv, image, tracked, model.as_mut(), &mut |stage| {
             eprintln!("  {}…", stage.name());
@@ -462,7 +474,7 @@ fn save_avatar(
 /// GUAVA mode: the learned reconstruction with exported networks on an EHM body.
 fn reconstruct_guava(
     image: &Path,
-    tracking: Option<&Path>,
+    tracked: guava::reconstruct::Tracked,
     models: &Path,
     ehm: &Path,
     out: &Path,
@@ -479,15 +491,14 @@ fn reconstruct_guava(
         body.name,
         t0.elapsed().as_secs_f64()
     );
-    let beside = guava::reconstruct::tracking_beside(image);
-    let tracking = tracking.unwrap_or(&beside);
-    let mut landmarkers = landmarkers(keypoint_models).ok();
+    let without = "a photo without alpha cannot be masked";
+    let mut landmarkers = keypoint_models_for(&tracked, keypoint_models, without)?;
     let (avatar, report, _) = reconstruct_guava_file(
         &mut models,
         &body,
         &uv,
         image,
-        tracking,
+        tracked,
         landmarkers.as_mut(),
         &mut |stage| {
             eprintln!("  {}…", stage.name());
@@ -499,37 +510,63 @@ fn reconstruct_guava(
         report.texels, report.observed_texels, report.pruned
     );
     save_avatar(&avatar, image, out, &counts)?;
+    if let Some(f) = &report.fit {
+        print_fit(f);
+    }
     for (stage, d) in &report.timings {
         println!("  {:32} {:8.1} ms", stage.name(), d.as_secs_f64() * 1e3);
     }
     Ok(())
 }
 
-/// Fits the default body to a photo's keypoints and writes the result as a tracking file.
-fn fit(image: &Path, out: &Path, overlay: Option<&Path>, models: Option<&Path>) -> Result<()> {
+/// Fits the default body (or an EHM body) to a photo's keypoints and writes the result as a
+/// tracking file.
+fn fit(
+    image: &Path,
+    out: &Path,
+    overlay: Option<&Path>,
+    models: Option<&Path>,
+    ehm: Option<&Path>,
+) -> Result<()> {
+    use guava::fit::{fit_detections, fit_ehm_detections};
     use guava::reconstruct::SourceImage;
-    let body = guava::body::BodyModel::default_body()?;
     let source = SourceImage::load(image)?;
     let mut models = landmarkers(models)?;
     let t0 = std::time::Instant::now();
     let found = models.detect(&source)?;
     let t1 = std::time::Instant::now();
-    let (view, report) = guava::fit::fit_detections(&body, &found, &mut models.face, source.size)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", image.display()))?;
-    let t2 = std::time::Instant::now();
     let name = image.file_name().unwrap_or_default().to_string_lossy();
-    view.to_tracking(
-        &body,
-        &format!(
-            "fitted by guava fit to {name}: pose_landmark_full keypoints{}, default body",
-            if report.face.is_some() {
-                " and face_landmark face mesh"
-            } else {
-                ""
-            }
-        ),
-    )
-    .save(out)?;
+    let fitted = |report: &guava::fit::FitReport, body: &str| {
+        let face = if report.face.is_some() {
+            " and face_landmark face mesh"
+        } else {
+            ""
+        };
+        format!("fitted by guava fit to {name}: pose_landmark_full keypoints{face}, {body}")
+    };
+    let failed = |e: guava::fit::FitError| anyhow::anyhow!("{}: {e}", image.display());
+    let (tracking, report) = match ehm {
+        Some(path) => {
+            let body = guava::body::EhmModel::load(path)?;
+            let (view, report) =
+                fit_ehm_detections(&body, &found, &mut models.face, source.size).map_err(failed)?;
+            (
+                view.to_tracking(&body, &fitted(&report, &body.name)),
+                report,
+            )
+        }
+        None => {
+            let body = guava::body::BodyModel::default_body()?;
+            let (view, report) =
+                fit_detections(&body, &found, &mut models.face, source.size).map_err(failed)?;
+            (
+                view.to_tracking(&body, &fitted(&report, "default body")),
+                report,
+            )
+        }
+    };
+    let t2 = std::time::Instant::now();
+    tracking.save(out)?;
     println!(
         "{}: person presence {:.2} → {}",
         image.display(),
@@ -543,19 +580,16 @@ fn fit(image: &Path, out: &Path, overlay: Option<&Path>, models: Option<&Path>) 
         (t2 - t1).as_secs_f64() * 1e3
     );
     if let Some(path) = overlay {
-        write_fit_overlay(&body, &source, &found, &view, &report, path)?;
+        write_fit_overlay(&source, &report, path)?;
         println!("  overlay → {}", path.display());
     }
     Ok(())
 }
 
 /// The photo at twice its size with each point found (green) and where the fitted body puts it
-/// (red): body keypoints as rings, face-mesh and hand points as dots.
+/// (red): body keypoints as rings, face-mesh, hand and iris points as dots.
 fn write_fit_overlay(
-    body: &guava::body::BodyModel,
     source: &guava::reconstruct::SourceImage,
-    found: &guava::keypoints::Detections,
-    view: &guava::reconstruct::SourceView,
     report: &guava::fit::FitReport,
     path: &Path,
 ) -> Result<()> {
@@ -585,15 +619,9 @@ fn write_fit_overlay(
         }
     };
     let (green, red) = ([60, 230, 60], [240, 40, 40]);
-    let mut posed = guava::body::PosedBody::default();
-    body.pose(&view.pose, &mut posed)?;
-    let marks = body.landmark_positions(&posed.vertices);
-    for k in &found.pose.keypoints {
-        if let Some(l) = body.landmarks.iter().position(|l| l.name == k.name) {
-            let q = view.camera.project(marks[l]);
-            dot(k.pixel, 4.0, green, true);
-            dot(glam::Vec2::new(q.x, q.y), 2.5, red, false);
-        }
+    for (&seen, &fitted) in report.observed.iter().zip(&report.fitted) {
+        dot(seen, 4.0, green, true);
+        dot(fitted, 2.5, red, false);
     }
     let face = report
         .face

@@ -254,3 +254,56 @@ fn reconstruct_in_guava_mode_with_exported_networks() {
     assert!(!ok && stderr.contains("--ehm"), "{stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// GUAVA mode on a photo without tracking: `guava fit --ehm` writes the EHM's tracking (SMPL-X
+/// joints, EHM identity, FLAME parameters), which `guava reconstruct` in GUAVA mode takes; without
+/// a tracking file beside the photo, GUAVA mode fits it itself and says how well.
+#[test]
+fn guava_mode_fits_photos_without_tracking() {
+    let dir = std::env::temp_dir().join(format!("guava-cli-ehm-fit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let ehm = "tests/data/ehm_synthetic.npz";
+    let photo = dir.join("portrait.png");
+    std::fs::copy("assets/demo_portrait.png", &photo).expect("copy");
+    let (track, out) = (dir.join("fitted.json"), dir.join("portrait.guava"));
+    let path = |p: &std::path::Path| p.display().to_string();
+    let (photo_s, track_s, out_s) = (path(&photo), path(&track), path(&out));
+    let (ok, stdout, stderr) =
+        guava(&["fit", "--image", &photo_s, "--ehm", ehm, "--out", &track_s]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("fitted to 11 body keypoints"), "{stdout}");
+    let tracking = guava::tracking::Tracking::load(&track).expect("a valid tracking file");
+    assert_eq!(tracking.body, guava::tracking::BodyKind::Smplx);
+    assert_eq!(tracking.joints.len(), 55);
+    assert!(tracking.identity.ehm.is_some());
+    assert!(
+        tracking
+            .parameters
+            .iter()
+            .any(|p| p == "flame_expression_000")
+    );
+
+    let reconstruct = |extra: &[&str]| {
+        let mut a = vec![
+            "reconstruct",
+            "--image",
+            &photo_s,
+            "--guava-models",
+            "tests/data/guava_onnx",
+            "--ehm",
+            ehm,
+            "--out",
+            &out_s,
+        ];
+        a.extend(extra);
+        guava(&a)
+    };
+    let (ok, stdout, stderr) = reconstruct(&["--tracking", &track_s]);
+    assert!(ok, "{stderr}");
+    assert!(!stdout.contains("fitted to"), "{stdout}");
+    let (ok, stdout, stderr) = reconstruct(&[]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("fitted to 11 body keypoints"), "{stdout}");
+    assert!(guava::avatar::Avatar::load(&out).is_ok());
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -13,7 +13,7 @@ use guava::guava_mode::reconstruct::{PRUNE_OPACITY, Projection};
 use guava::guava_mode::{GuavaModels, reconstruct_guava, uv_map};
 use guava::npz::Npz;
 use guava::onnx::OnnxRuntime;
-use guava::reconstruct::{ReconstructError, SourceImage, SourceView, UvMap};
+use guava::reconstruct::{ReconstructError, SourceImage, SourceView, Tracked, UvMap};
 
 fn model() -> EhmModel {
     EhmModel::load(Path::new("tests/data/ehm_synthetic.npz")).expect("synthetic EHM loads")
@@ -323,7 +323,7 @@ fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
             &model,
             &uv,
             &photo_path,
-            &tracking_path,
+            Tracked::File(&tracking_path),
             None,
             &mut |_| true,
         )
@@ -357,7 +357,7 @@ fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
         &model,
         &uv,
         &opaque,
-        &dir.join("opaque.json"),
+        Tracked::File(&dir.join("opaque.json")),
         Some(&mut landmarkers),
         &mut |_| true,
     )
@@ -392,5 +392,63 @@ fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
     );
     let err = Avatar::from_bytes(&broken, "bad.guava").expect_err("zero scale");
     assert!(err.to_string().contains("ehm_identity.head_scale"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A photo without a tracking file is fitted in GUAVA mode: the keypoint models' points on the
+/// demo portrait fitted on the synthetic EHM (its random skinning makes the pose meaningless;
+/// `ehm_fit` checks the fit's answers on a body that means something), the fit reported with the
+/// reconstruction. Without the keypoint models, or with nobody in the photo, the error says so
+/// and names the photo.
+#[test]
+fn guava_mode_fits_a_photo_without_tracking() {
+    use guava::guava_mode::reconstruct_guava_file;
+    let model = model();
+    let mut models = models();
+    let d = models.dims;
+    let uv = uv_map(&model, d.uv as u32);
+    let photo = Path::new("assets/demo_portrait.png");
+    let mut run = |photo: &Path, landmarkers: Option<&mut guava::keypoints::Landmarkers>| {
+        reconstruct_guava_file(
+            &mut models,
+            &model,
+            &uv,
+            photo,
+            Tracked::Fit,
+            landmarkers,
+            &mut |_| true,
+        )
+    };
+    let err = run(photo, None).expect_err("no keypoint models");
+    let text = err.to_string();
+    assert!(
+        text.contains("demo_portrait.png") && text.contains("keypoint models"),
+        "{text}"
+    );
+
+    let runtime = OnnxRuntime::load().expect("ONNX Runtime");
+    let mut landmarkers = guava::keypoints::Landmarkers::load(runtime).expect("shipped models");
+    let (avatar, report, view) = run(photo, Some(&mut landmarkers)).expect("fits and reconstructs");
+    let fit = report.fit.expect("the fit is reported");
+    println!(
+        "synthetic EHM fitted to {} keypoints, {:.1} px RMS",
+        fit.keypoints_used, fit.rms_px
+    );
+    assert!(fit.keypoints_used >= 4);
+    assert_eq!(avatar.template.len(), model.body.template.len());
+    assert_eq!(view.pose.rotations.len(), 55);
+
+    let dir = std::env::temp_dir().join(format!("guava-ehm-fit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let empty = dir.join("empty.png");
+    image::RgbImage::from_pixel(d.image as u32, d.image as u32, image::Rgb([128, 128, 128]))
+        .save(&empty)
+        .expect("photo");
+    let err = run(&empty, Some(&mut landmarkers)).expect_err("nobody to fit");
+    let text = err.to_string();
+    assert!(
+        text.contains("empty.png") && text.contains("no person"),
+        "{text}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -8,6 +8,7 @@ mod npz_writer;
 mod body;
 mod cli;
 mod ehm;
+mod ehm_fit;
 mod fit;
 mod guava_mode;
 mod guava_models;

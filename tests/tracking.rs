@@ -427,6 +427,9 @@ fn default_motion_onto_an_smplx_rig_reports_what_it_drops() {
         fn vertex_count(&self) -> usize {
             0
         }
+        fn is_identity_parameter(&self, _: usize) -> bool {
+            false
+        }
         fn pose(&self, _: &BodyPose, out: &mut PosedBody) -> Result<(), guava::body::PoseError> {
             // A T-posed skeleton: the arms along ±x.
             out.joints = SMPLX_JOINTS

@@ -104,7 +104,7 @@ impl Avatar {
                 self.body, self.body_vertices, self.body_triangles, name, vertices, triangles
             ));
         }
-        if self.ehm_identity.is_some() && !body.uses_ehm_identity() {
+        if self.ehm_identity.is_some() && body.ehm_identity().is_none() {
             return Err(format!(
                 "the avatar carries EHM's joint offsets and head and hand scales, which body {name:?} does not take"
             ));

@@ -21,7 +21,10 @@ mod normals;
 mod points;
 mod pose;
 
-pub use ehm::{EHM_FORMAT, EhmExtras, EhmIdentity, EhmModel, EhmParams, ReferenceTexels};
+pub use ehm::{
+    EHM_FORMAT, EhmExtras, EhmIdentity, EhmModel, EhmParams, LINEAR_COMPONENTS, ReferenceTexels,
+    Skinned,
+};
 pub use frames::{TriangleFrame, triangle_frames};
 pub use glb::BodyAssetError;
 pub use head_size::HEAD_SIZE;

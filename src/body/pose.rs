@@ -47,9 +47,11 @@ pub trait Posable {
     fn vertex_count(&self) -> usize;
     /// Poses into `out` (reused across frames). Non-finite inputs are treated as zero and counted.
     fn pose(&self, pose: &BodyPose, out: &mut PosedBody) -> Result<(), PoseError>;
-    /// Whether the model takes EHM's identity (joint offsets, head and hand scale).
-    fn uses_ehm_identity(&self) -> bool {
-        false
+    /// Whether parameter `i` belongs to the person (shape), not to a moment (expression, pose).
+    fn is_identity_parameter(&self, i: usize) -> bool;
+    /// EHM's identity (joint offsets, head and hand scale) for a model that takes one.
+    fn ehm_identity(&self) -> Option<&super::EhmIdentity> {
+        None
     }
 }
 
@@ -224,5 +226,9 @@ impl Posable for BodyModel {
 
     fn pose(&self, pose: &BodyPose, out: &mut PosedBody) -> Result<(), PoseError> {
         BodyModel::pose(self, pose, out)
+    }
+
+    fn is_identity_parameter(&self, i: usize) -> bool {
+        self.targets[i].group == super::TargetGroup::Shape
     }
 }

@@ -1,17 +1,19 @@
-//! Single-image fitting: the camera, body pose, shape, facial expression and fingers of the
-//! default body that put its points on a photo's 2D keypoints (Levenberg–Marquardt with priors).
+//! Single-image fitting: the camera, body pose, shape, facial expression and fingers of a body
+//! template (the default body, or EHM through its linear form, [`fit_ehm_detections`]) that put
+//! its points on a photo's 2D keypoints (Levenberg–Marquardt with priors).
 //!
-//! Three stages, each posing only the points it observes ([`PointPoser`]). **Body:** the global
+//! Four stages, each posing only the points it observes ([`PointPoser`]). **Body:** the global
 //! orientation (root axis-angle), the camera translation (GUAVA's camera: `invtanfov` 24, looking
 //! at the body's front, so its distance sets the scale), the rotations of [`FITTED_JOINTS`] and
 //! the shape coefficients (within their ranges), against the pose model's body keypoints.
-//! **Face**, when the face model found a face: head and neck, the [`FITTED_EXPRESSIONS`], the
-//! head's size ([`HEAD_SIZE`]) and a small image offset per facial feature, against the face
-//! mesh's points on the body ([`FaceEmbedding`]), the body keypoints kept in. **Hands**, for each
-//! hand found: forearm, wrist and fingers against its 21 points ([`hand_targets`]). **Gaze**, after
-//! the face stage, for each iris found: the eye joint against the iris centre (the body's pupil
-//! moved by its eye's feature offset, so the gaze is the iris's place within the eye, not the
-//! eye's place in the face). Residuals are
+//! **Face**, when the face model found a face: head and neck, the [`FITTED_EXPRESSIONS`] (on a
+//! body without ARKit units, its expression components and its jaw joint), the head's size
+//! ([`HEAD_SIZE`], where the body has it) and a small image offset per facial feature, against
+//! the face mesh's points on the body ([`FaceEmbedding`]), the body keypoints kept in.
+//! **Hands**, for each hand found: forearm, wrist and fingers against its 21 points
+//! ([`hand_targets`]). **Gaze**, after the face stage, for each iris found: the eye joint
+//! against the iris centre (the body's pupil moved by its eye's feature offset, so the gaze is
+//! the iris's place within the eye, not the eye's place in the face). Residuals are
 //! reprojection errors in pixels, weighted by √confidence; priors pull joints to rest at
 //! [`PRIOR_PX_PER_RAD`] pixels per radian, shape to the default at [`SHAPE_PRIOR_PX`],
 //! expressions to neutral at [`EXPRESSION_PRIOR_PER_EYE_SPAN`] per unit and fingers to rest in
@@ -28,7 +30,7 @@ pub use hand::{BodyPoint, hand_targets};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use crate::body::{BodyModel, BodyPose, HEAD_SIZE, Landmark, PointPoser, TargetGroup};
+use crate::body::{BodyModel, BodyPose, EhmModel, HEAD_SIZE, Landmark, PointPoser, TargetGroup};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
 use crate::keypoints::{
     Detections, FACE_EYE_CORNERS, FaceLandmarker, FaceLandmarks, HandLandmarks, Iris, Keypoint,
@@ -70,8 +72,10 @@ pub const FITTED_EXPRESSIONS: [&str; 14] = [
     "browOuterUpLeft",
     "browOuterUpRight",
 ];
-/// The joints the face stage turns again, with the expression.
+/// The joints the face stage turns again, with the expression; and the jaw, on a body whose
+/// mouth opens by its jaw joint rather than an ARKit `jawOpen` unit (EHM: FLAME's jaw).
 const FACE_JOINTS: [&str; 2] = ["neck01", "head"];
+const JAW_JOINT: &str = "jaw";
 /// The person's face is not the default body's: the face stage sizes the body's head to it
 /// ([`HEAD_SIZE`], a shape target, so texture mapping sees the face where the photo has it) and
 /// lets each feature (lips, eyes, brows, nose) sit a little apart in the image from where the
@@ -140,6 +144,10 @@ pub struct FitReport {
     pub iterations: usize,
     /// Root-mean-square reprojection error of the used body keypoints, in pixels.
     pub rms_px: f32,
+    /// Each used body keypoint as the model found it, and where the fitted body puts it (source
+    /// pixels).
+    pub observed: Vec<Vec2>,
+    pub fitted: Vec<Vec2>,
     /// The face stage, when it ran.
     pub face: Option<FaceFitReport>,
     /// Why the face stage did not run, when it did not.
@@ -375,6 +383,32 @@ impl Stage<'_> {
     }
 }
 
+/// The joints the face stage turns ([`FACE_JOINTS`], and [`JAW_JOINT`] without `jawOpen`).
+fn face_joints(body: &BodyModel) -> Result<Vec<usize>, FitError> {
+    let jaw = body.target_index("jawOpen").is_none();
+    FACE_JOINTS
+        .iter()
+        .chain(jaw.then_some(&JAW_JOINT))
+        .map(|n| {
+            body.joint_index(n)
+                .ok_or_else(|| FitError::MissingOnBody((*n).into()))
+        })
+        .collect()
+}
+
+/// The face units the face stage fits: [`FITTED_EXPRESSIONS`] where the body has them (ARKit
+/// names); on a body with none of them (EHM's FLAME components), every expression target.
+fn fitted_expressions(body: &BodyModel) -> impl Iterator<Item = usize> + '_ {
+    let named: Vec<usize> = FITTED_EXPRESSIONS
+        .iter()
+        .filter_map(|n| body.target_index(n))
+        .collect();
+    let all = named
+        .is_empty()
+        .then(|| body.targets_in(TargetGroup::Expression).map(|(i, _)| i));
+    named.into_iter().chain(all.into_iter().flatten())
+}
+
 /// Fits the body to what the keypoint models found on a photo: body keypoints, and the face mesh
 /// when there is one (placed on the body by [`embed_face`] with `face_model`). A face that cannot
 /// be used leaves the fit to the body keypoints and says why in [`FitReport::face_skipped`].
@@ -408,6 +442,28 @@ pub fn fit_detections(
     let (view, mut report) = fit_keypoints(body, &input, side)?;
     report.face_skipped = embedding.err();
     Ok((view, report))
+}
+
+/// [`fit_detections`] for GUAVA's body: fits EHM's linear form ([`EhmModel::linearised`]) and
+/// returns the view as a pose of EHM itself.
+pub fn fit_ehm_detections(
+    body: &EhmModel,
+    detections: &Detections,
+    face_model: &mut FaceLandmarker,
+    side: u32,
+) -> Result<(SourceView, FitReport), FitError> {
+    let linear = body.linearised();
+    let (view, report) = fit_detections(&linear, detections, face_model, side)?;
+    let pose = body
+        .pose_from_linear(&linear, &view.pose)
+        .expect("the linear body's pose has its lengths and EHM's parameter names");
+    Ok((
+        SourceView {
+            pose,
+            camera: view.camera,
+        },
+        report,
+    ))
 }
 
 /// What the fit sees on a photo.
@@ -582,25 +638,18 @@ pub fn fit_keypoints(
                 .map(|k| FACE_FEATURES.iter().position(|(_, r)| r.contains(&k))),
         );
         let mut unknowns = Vec::new();
-        for name in FACE_JOINTS {
-            let j = joint(name)?;
+        for j in face_joints(body)? {
             unknowns.extend((0..3).map(|k| (Unknown::Joint(j, k), PRIOR_PX_PER_RAD)));
         }
         let eye_span =
             landmarks.points[FACE_EYE_CORNERS.0].distance(landmarks.points[FACE_EYE_CORNERS.1]);
         let expression_prior = EXPRESSION_PRIOR_PER_EYE_SPAN * eye_span as f64;
-        // A body without one of these units (not ARKit-named) simply does not fit it.
-        unknowns.extend(
-            FITTED_EXPRESSIONS
-                .iter()
-                .filter_map(|n| body.target_index(n))
-                .map(|i| {
-                    (
-                        Unknown::Coefficient(i, body.targets[i].range),
-                        expression_prior,
-                    )
-                }),
-        );
+        unknowns.extend(fitted_expressions(body).map(|i| {
+            (
+                Unknown::Coefficient(i, body.targets[i].range),
+                expression_prior,
+            )
+        }));
         if let Some(t) = body.target_index(HEAD_SIZE) {
             let range = body.targets[t].range;
             unknowns.push((Unknown::Coefficient(t, range), SHAPE_PRIOR_PX));
@@ -740,6 +789,11 @@ pub fn fit_keypoints(
         keypoints_used: body_observed,
         iterations,
         rms_px: stage.rms(&result, 0..body_observed),
+        observed: stage.observations[..body_observed]
+            .iter()
+            .map(|o| o.1)
+            .collect(),
+        fitted: stage.projected(&result, 0..body_observed),
         face: face_report,
         face_skipped: None,
         hands: hands_report,

@@ -10,7 +10,7 @@
 
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use glam::{Mat4, Vec2, Vec3};
 
@@ -19,9 +19,13 @@ use super::sample::{Padding, grid_sample, project_ndc};
 use crate::avatar::{Avatar, AvatarKind, LocalGaussians, UvGaussians};
 use crate::body::{EhmModel, Posable, PosedBody};
 use crate::camera::Camera;
-use crate::keypoints::Landmarkers;
+use crate::fit::{FitReport, fit_ehm_detections};
+use crate::keypoints::{Detections, Landmarkers};
 use crate::reconstruct::raster::rasterize;
-use crate::reconstruct::{ReconstructError, SourceImage, SourceView, Stage, StageClock, UvMap};
+use crate::reconstruct::{
+    ReconstructError, SOURCE_SIZE, SourceImage, SourceView, Stage, StageClock, Tracked, UvMap,
+    fit_error,
+};
 use crate::tracking::{EhmIdentityRecord, Tracking};
 
 /// UV Gaussians at or below this opacity are dropped (`cfg.opacity_threshold`).
@@ -39,6 +43,8 @@ pub struct GuavaReport {
     /// The source pose's vertices in front of the camera, projected into the source view in
     /// units of the square's side (so the user can see whether the tracking fits the photo).
     pub projected: Vec<Vec2>,
+    /// How the source view was fitted to the photo, when it was.
+    pub fit: Option<FitReport>,
 }
 
 /// The EHM body's texel map at `size`²: the reference's own (OpenCV's fill, stored by
@@ -214,51 +220,93 @@ pub fn reconstruct_guava(
 
 /// Reads `photo` at the encoder's size, masks it (its alpha, else the pose model's person
 /// segmentation when `landmarkers` are given, else refused: GUAVA's encoder was trained on
-/// masked photos), takes frame 0 of `tracking` on `body` (with the tracking's EHM identity) as the
-/// source view and runs [`reconstruct_guava`]; also returns that view. Every error names its file.
+/// masked photos), gets the source view on `body` and runs [`reconstruct_guava`]; also returns
+/// that view. The view is frame 0 of a tracking file (with the tracking's EHM identity), or a fit
+/// of the body's linear form ([`EhmModel::linearised`]) to the keypoint models' points on the
+/// photo (with the body's own identity), or given. Every error names its file.
 pub fn reconstruct_guava_file(
     models: &mut GuavaModels,
     body: &EhmModel,
     uv: &UvMap,
     photo: &Path,
-    tracking: &Path,
-    landmarkers: Option<&mut Landmarkers>,
+    tracked: Tracked,
+    mut landmarkers: Option<&mut Landmarkers>,
     progress: &mut dyn FnMut(Stage) -> bool,
 ) -> Result<(Avatar, GuavaReport, SourceView), ReconstructError> {
     let mut image = SourceImage::load_at(photo, models.dims.image as u32)?;
-    if image.mask.is_none() {
-        let pose = landmarkers
-            .ok_or_else(|| ReconstructError::Image {
-                file: photo.display().to_string(),
-                problem:
-                    "has no alpha channel and the pose model (for its person mask) did not load"
-                        .into(),
-            })?
-            .pose(&image)
-            .map_err(|e| ReconstructError::Keypoints(e.to_string()))?;
-        image.apply_mask(pose.mask_at(image.size as usize));
+    let file = photo.display().to_string();
+    let fitting = matches!(tracked, Tracked::Fit);
+    let started = Instant::now();
+    let mut detections = None;
+    if fitting || image.mask.is_none() {
+        let keypoint_models = landmarkers.as_deref_mut().ok_or_else(|| {
+            let needs = if fitting {
+                "has no tracking file, and fitting it needs the keypoint models"
+            } else {
+                "has no alpha channel, and its person mask needs the pose model"
+            };
+            ReconstructError::Image {
+                file: file.clone(),
+                problem: format!("{needs}, which did not load"),
+            }
+        })?;
+        if !progress(Stage::Fit) {
+            return Err(ReconstructError::Cancelled);
+        }
+        let found = if fitting {
+            // The keypoint models see the photo at the source size, not the encoder's.
+            keypoint_models.detect(&SourceImage::load(photo)?)
+        } else {
+            keypoint_models.pose(&image).map(Detections::pose_only)
+        };
+        detections = Some(found.map_err(|e| ReconstructError::Keypoints(e.to_string()))?);
     }
-    let name = tracking.display().to_string();
-    let tracking = Tracking::load(tracking)?;
-    let view = SourceView::from_tracking(&tracking, body, &name)?;
+    if image.mask.is_none()
+        && let Some(d) = &detections
+    {
+        image.apply_mask(d.pose.mask_at(image.size as usize));
+    }
+    let mut fit = None;
+    let (view, identity) = match tracked {
+        Tracked::File(tracking) => {
+            let name = tracking.display().to_string();
+            let tracking = Tracking::load(tracking)?;
+            let view = SourceView::from_tracking(&tracking, body, &name)?;
+            // The tracker's skeleton (joint offsets, head and hand scale) belongs to this person:
+            // the body is built with it, so sampling sees the tracked body.
+            let identity = tracking
+                .identity
+                .ehm
+                .as_ref()
+                .map_or_else(Default::default, EhmIdentityRecord::to_identity);
+            (view, identity)
+        }
+        Tracked::Given(view) => (view, body.identity.clone()),
+        Tracked::Fit => {
+            let found = detections.as_ref().expect("detected above when fitting");
+            let face = &mut landmarkers.expect("checked above").face;
+            let (view, report) = fit_ehm_detections(body, found, face, SOURCE_SIZE)
+                .map_err(|e| fit_error(&file, e))?;
+            fit = Some(report);
+            (view, body.identity.clone())
+        }
+    };
+    let fit_time = started.elapsed();
     let source = photo.file_name().map_or_else(
         || photo.display().to_string(),
         |n| n.to_string_lossy().into_owned(),
     );
-    // The tracker's skeleton (joint offsets, head and hand scale) belongs to this person: the
-    // body is built with it, so sampling sees the tracked body (a copy only when it differs).
-    let identity = tracking
-        .identity
-        .ehm
-        .as_ref()
-        .map_or_else(Default::default, EhmIdentityRecord::to_identity);
-    let (avatar, report) = if identity == body.identity {
+    let (avatar, mut report) = if identity == body.identity {
         reconstruct_guava(models, body, uv, &view, &image, &source, progress)?
     } else {
         let mut tracked = body.clone();
         tracked.identity = identity;
         reconstruct_guava(models, &tracked, uv, &view, &image, &source, progress)?
     };
+    if detections.is_some() {
+        report.timings.insert(0, (Stage::Fit, fit_time));
+    }
+    report.fit = fit;
     Ok((avatar, report, view))
 }
 

@@ -59,6 +59,18 @@ pub struct Detections {
     pub irises: Vec<Iris>,
 }
 
+impl Detections {
+    /// The pose model's answer alone (what masking a photo needs).
+    pub fn pose_only(pose: PoseKeypoints) -> Self {
+        Self {
+            pose,
+            face: None,
+            hands: Vec::new(),
+            irises: Vec::new(),
+        }
+    }
+}
+
 /// Where the shipped models are, and the file names [`Landmarkers::load_dir`] looks for.
 pub const MODELS_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/models");
 pub const MODEL_FILES: [&str; 7] = [

@@ -26,7 +26,7 @@ use crate::camera::Camera;
 use crate::fit::FitReport;
 use crate::keypoints::{Detections, Landmarkers};
 use crate::tracking::{
-    BodyKind, Frame, Retarget, TrackedCamera, Tracking, TrackingError, camera_at,
+    BodyKind, EhmIdentityRecord, Frame, Retarget, TrackedCamera, Tracking, TrackingError, camera_at,
 };
 pub use default_mode::{DEFAULT_CHANNELS, DiscStyle};
 pub use source::{SOURCE_SIZE, SourceImage};
@@ -126,41 +126,38 @@ pub struct SourceView {
 }
 
 impl SourceView {
-    /// A one-frame tracking file for the default body holding this view exactly (what `guava fit`
-    /// and the viewer's *Save as tracking* write); `source` says where it came from.
-    pub fn to_tracking(&self, body: &BodyModel, source: &str) -> Tracking {
+    /// A one-frame tracking file for `body` holding this view exactly (what `guava fit` and the
+    /// viewer's *Save as tracking* write): its rig's joints, its shape as identity (with EHM's
+    /// skeleton for an EHM body), its other parameters as the frame's values, the camera;
+    /// `source` says where it came from.
+    pub fn to_tracking(&self, body: &impl Posable, source: &str) -> Tracking {
         let view = self;
-        let expressions: Vec<usize> = body
-            .targets_in(TargetGroup::Expression)
-            .map(|(i, _)| i)
-            .collect();
+        let (identity, values): (Vec<usize>, Vec<usize>) =
+            (0..body.parameter_names().len()).partition(|&i| body.is_identity_parameter(i));
+        let names: Vec<&str> = body.parameter_names().collect();
         let mut tracking = Tracking::new(
-            BodyKind::Default,
+            crate::tracking::rig_of(body).unwrap_or(BodyKind::Default),
             30.0,
             body.joint_names().map(String::from).collect(),
-            expressions
-                .iter()
-                .map(|&i| body.targets[i].name.clone())
-                .collect(),
+            values.iter().map(|&i| names[i].to_owned()).collect(),
         );
         tracking.source = source.into();
-        for (i, t) in body.targets_in(TargetGroup::Shape) {
+        for i in identity {
             if view.pose.coefficients[i] != 0.0 {
+                let name = names[i].to_owned();
                 tracking
                     .identity
                     .parameters
-                    .insert(t.name.clone(), view.pose.coefficients[i]);
+                    .insert(name, view.pose.coefficients[i]);
             }
         }
+        tracking.identity.ehm = body.ehm_identity().map(EhmIdentityRecord::of);
         let w2c: glam::Mat4 = view.camera.view_from_world;
         let rows = [0, 1, 2].map(|r| w2c.row(r).to_array());
         tracking.frames.push(Frame {
             translation: view.pose.translation.to_array(),
             rotations: view.pose.rotations.iter().map(|r| r.to_array()).collect(),
-            values: expressions
-                .iter()
-                .map(|&i| view.pose.coefficients[i])
-                .collect(),
+            values: values.iter().map(|&i| view.pose.coefficients[i]).collect(),
             camera: Some(TrackedCamera {
                 w2c: rows,
                 invtanfov: view.camera.invtanfov(),
@@ -325,12 +322,7 @@ pub fn reconstruct_photo_file(
             models.detect(&image)
         } else {
             // Only the mask is needed: the face model would find nothing the tracking lacks.
-            models.pose(&image).map(|pose| Detections {
-                pose,
-                face: None,
-                hands: Vec::new(),
-                irises: Vec::new(),
-            })
+            models.pose(&image).map(Detections::pose_only)
         };
         keypoints = Some(found.map_err(|e| ReconstructError::Keypoints(e.to_string()))?);
     }
@@ -360,15 +352,7 @@ pub fn reconstruct_photo_file(
             })?;
             let models = landmarkers.expect("the keypoints came from them");
             let (view, report) = crate::fit::fit_detections(body, k, &mut models.face, image.size)
-                .map_err(|e| ReconstructError::Image {
-                    file: file.clone(),
-                    problem: match e {
-                        crate::fit::FitError::NoPerson { .. } => {
-                            format!("{e}; give the photo's tracking file")
-                        }
-                        e => e.to_string(),
-                    },
-                })?;
+                .map_err(|e| fit_error(&file, e))?;
             (view, Some(report))
         }
     };
@@ -384,6 +368,17 @@ pub fn reconstruct_photo_file(
     report.fit = fit;
     report.keypoints = keypoints.map(|k| k.pose.keypoints).unwrap_or_default();
     Ok((avatar, report, view))
+}
+
+/// A failed fit of the photo `file`, as the reconstruction reports it.
+pub(crate) fn fit_error(file: &str, e: crate::fit::FitError) -> ReconstructError {
+    ReconstructError::Image {
+        file: file.into(),
+        problem: match e {
+            crate::fit::FitError::NoPerson { .. } => format!("{e}; give the photo's tracking file"),
+            e => e.to_string(),
+        },
+    }
 }
 
 /// Times consecutive stages and asks the progress callback whether to go on.

@@ -15,6 +15,7 @@ pub use format::{
     TRACKING_FORMAT, TrackedCamera, Tracking, TrackingError,
 };
 pub use playback::{Player, camera_at};
+pub(crate) use retarget::rig_of;
 pub use retarget::{Retarget, RetargetReport};
 
 /// The shipped demo motion for the default body (`tools/make_demo_motion.py`).

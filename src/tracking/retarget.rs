@@ -116,7 +116,7 @@ fn collapse_runs(names: &[String]) -> String {
 }
 
 /// The rig a model's joint names belong to, if it is one of the two known ones.
-fn rig_of(model: &impl Posable) -> Option<BodyKind> {
+pub(crate) fn rig_of(model: &impl Posable) -> Option<BodyKind> {
     let has = |name: &str| model.joint_names().any(|n| n == name);
     if has("pelvis") && has("left_shoulder") {
         Some(BodyKind::Smplx)
@@ -272,7 +272,8 @@ impl Retarget {
                 None => report.unmapped_identity.push(name.clone()),
             }
         }
-        report.ehm_identity_ignored = tracking.identity.ehm.is_some() && !model.uses_ehm_identity();
+        report.ehm_identity_ignored =
+            tracking.identity.ehm.is_some() && model.ehm_identity().is_none();
         report.joints_mapped = joints.len();
         report.parameters_mapped = parameters.len();
         Self {

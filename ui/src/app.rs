@@ -499,20 +499,14 @@ impl GuavaApp {
                         worker_stage,
                         worker_cancel,
                     ),
-                    (ViewerBody::Ehm(body), Some(tracking)) => guava_worker(
+                    (ViewerBody::Ehm(body), tracking) => guava_worker(
                         body,
                         networks.as_deref(),
                         &worker_path,
-                        &tracking,
+                        tracking.as_deref().map_or(Tracked::Fit, Tracked::File),
                         worker_stage,
                         worker_cancel,
                     ),
-                    (ViewerBody::Ehm(_), None) => Err(format!(
-                        "{}: GUAVA mode needs the photo's tracking on the EHM body beside it ({}); \
-                         single-image fitting fits the default body only",
-                        worker_path.display(),
-                        file_name(&guava::reconstruct::tracking_beside(&worker_path))
-                    )),
                 },
                 Kind::Body => BodyModel::load(&worker_path)
                     .map(|m| Loaded::Body(ViewerBody::Template(Arc::new(m))))
@@ -1323,8 +1317,18 @@ fn reconstruct_worker(
 /// What a default reconstruction saw and how long it took, for the avatar's label.
 fn default_summary(r: &guava::reconstruct::Report) -> String {
     let ms: f64 = r.timings.iter().map(|(_, d)| d.as_secs_f64() * 1e3).sum();
+    let mut summary = r.fit.as_ref().map(fit_summary).unwrap_or_default();
+    summary.push_str(&format!(
+        "{} of {} texels seen, {} mirrored, rest inpainted; {ms:.0} ms",
+        r.observed, r.texels, r.mirrored
+    ));
+    summary
+}
+
+/// How the source view was fitted, for the avatar's label (ends with "; ").
+fn fit_summary(f: &guava::fit::FitReport) -> String {
     let mut summary = String::new();
-    if let Some(f) = &r.fit {
+    {
         summary.push_str(&format!(
             "pose and camera fitted to {} keypoints ({:.1} px RMS)",
             f.keypoints_used, f.rms_px
@@ -1342,23 +1346,20 @@ fn default_summary(r: &guava::reconstruct::Report) -> String {
         }
         summary.push_str("; ");
     }
-    summary.push_str(&format!(
-        "{} of {} texels seen, {} mirrored, rest inpainted; {ms:.0} ms",
-        r.observed, r.texels, r.mirrored
-    ));
     summary
 }
 
-/// GUAVA mode: the photo with its tracking on the EHM body through GUAVA's networks.
+/// GUAVA mode: the photo with its tracking (or fitted) on the EHM body through GUAVA's networks.
 fn guava_worker(
     body: &EhmModel,
     networks: Option<&Mutex<GuavaModels>>,
     photo: &Path,
-    tracking: &Path,
+    tracked: guava::reconstruct::Tracked,
     stage: &Mutex<&'static str>,
     cancel: &AtomicBool,
 ) -> Result<Loaded, String> {
     use guava::guava_mode::{reconstruct_guava_file, uv_map};
+    let fitting = matches!(tracked, guava::reconstruct::Tracked::Fit);
     let networks = networks.ok_or_else(|| {
         format!(
             "{}: GUAVA mode needs GUAVA's networks: open their folder (Mode > Networks folder…, \
@@ -1366,15 +1367,26 @@ fn guava_worker(
             photo.display()
         )
     })?;
-    // The keypoint models only mask a photo without alpha (the tracking comes with the photo).
+    // The keypoint models fit a photo without tracking, and mask a photo without alpha.
     let has_alpha = guava::reconstruct::SourceImage::has_alpha(photo).map_err(|e| e.to_string())?;
-    let mut landmarkers = if has_alpha {
+    let mut landmarkers = if has_alpha && !fitting {
         None
     } else {
         *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the keypoint models";
-        guava::onnx::OnnxRuntime::load()
-            .ok()
-            .and_then(|rt| guava::keypoints::Landmarkers::load(rt).ok())
+        let loaded = guava::onnx::OnnxRuntime::load()
+            .map_err(|e| e.to_string())
+            .and_then(|rt| guava::keypoints::Landmarkers::load(rt).map_err(|e| e.to_string()));
+        match loaded {
+            Ok(m) => Some(m),
+            Err(e) if fitting => {
+                return Err(format!(
+                    "{}: no tracking file beside it, and fitting needs the keypoint models: {e}",
+                    photo.display()
+                ));
+            }
+            // reconstruct_guava_file says what is missing if the photo needs its mask.
+            Err(_) => None,
+        }
     };
     let mut models = networks.lock().unwrap_or_else(|e| e.into_inner());
     let uv = uv_map(body, models.dims.uv as u32);
@@ -1383,15 +1395,19 @@ fn guava_worker(
         body,
         &uv,
         photo,
-        tracking,
+        tracked,
         landmarkers.as_mut(),
         &mut progress(stage, cancel),
     )
     .map_err(|e| e.to_string())?;
     let ms: f64 = r.timings.iter().map(|(_, d)| d.as_secs_f64() * 1e3).sum();
     let summary = format!(
-        "networks: {}; {} of {} texels on faces the photo shows, {} Gaussians pruned; {ms:.0} ms",
-        models.source, r.observed_texels, r.texels, r.pruned
+        "networks: {}; {}{} of {} texels on faces the photo shows, {} Gaussians pruned; {ms:.0} ms",
+        models.source,
+        r.fit.as_ref().map(fit_summary).unwrap_or_default(),
+        r.observed_texels,
+        r.texels,
+        r.pruned
     );
     let preview = TrackedPhoto::new(photo, &r.projected).map_or(Preview::None, Preview::Tracked);
     let camera = (view.camera.view_from_world, view.camera.invtanfov());

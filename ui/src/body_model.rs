@@ -201,7 +201,17 @@ impl Posable for ViewerBody {
         }
     }
 
-    fn uses_ehm_identity(&self) -> bool {
-        self.is_ehm()
+    fn is_identity_parameter(&self, i: usize) -> bool {
+        match self {
+            Self::Template(m) => m.is_identity_parameter(i),
+            Self::Ehm(m) => m.is_identity_parameter(i),
+        }
+    }
+
+    fn ehm_identity(&self) -> Option<&guava::body::EhmIdentity> {
+        match self {
+            Self::Template(_) => None,
+            Self::Ehm(m) => Some(&m.identity),
+        }
     }
 }

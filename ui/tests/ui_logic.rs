@@ -416,8 +416,8 @@ fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
 
 /// GUAVA mode in the viewer: the EHM body and GUAVA's networks (the reduced, randomly initialised
 /// test export) open by file and by folder; a photo with its tracking becomes a GUAVA avatar on
-/// the EHM body, built with the tracked skeleton, and a pose change re-splats it. What is missing
-/// is a clear error that keeps the current state.
+/// the EHM body, built with the tracked skeleton, and a pose change re-splats it; a photo without
+/// tracking is fitted. What is missing is a clear error that keeps the current state.
 #[test]
 fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
     use guava::tracking::{BodyKind, EhmIdentityRecord, Frame, TrackedCamera, Tracking};
@@ -528,15 +528,28 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
     frame(&mut h);
     turning_a_joint_splats_once(&mut h, "left_elbow", 1.0);
 
-    // A photo without its tracking: named, and the avatar stays.
+    // A photo without its tracking is fitted: the card shows nobody, which is named, and the
+    // avatar stays; a portrait is fitted and reconstructed, its label saying how well.
     let lone = dir.join("lone.png");
     std::fs::copy(&photo, &lone).expect("copy");
     h.state_mut().open(lone);
     let status = wait_for_status(&mut h, "lone.png");
     assert!(
-        status.contains("lone.json") && status.contains("tracking"),
+        status.contains("no person found") && status.contains("tracking"),
         "{status}"
     );
     assert_eq!(h.state().avatar_info().map(|(_, n)| n), Some(count));
+    let portrait = dir.join("portrait.png");
+    std::fs::copy(data.join("../../assets/demo_portrait.png"), &portrait).expect("copy");
+    h.state_mut().open(portrait);
+    wait_until(&mut h, |app| {
+        app.avatar_info()
+            .is_some_and(|(l, _)| l.contains("portrait.png"))
+    });
+    let (label, _) = h.state().avatar_info().expect("reconstructed");
+    assert!(
+        label.contains("pose and camera fitted to 11 keypoints"),
+        "{label}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -7,6 +7,7 @@
 //! `tests/ehm.rs` checks it against the reference on a synthetic model to 1e-5 m.
 
 mod file;
+mod linear;
 
 use glam::{Affine3A, Mat3A, Vec3};
 
@@ -15,6 +16,7 @@ use super::pose::finite_or_zero;
 use super::{BodyPose, Posable, PoseError, PosedBody, SMPLX_JOINTS};
 
 pub use file::EHM_FORMAT;
+pub use linear::LINEAR_COMPONENTS;
 
 /// SMPL-X joint layout: root, 21 body joints, jaw, two eyes, then 15 joints per hand.
 const SMPLX_BODY: usize = 1;
@@ -147,6 +149,9 @@ pub struct EhmExtras {
     pub head_vertices: Vec<Vec3>,
     /// Skinning placements A_j of the body joints (`joint_transform_mat`).
     pub placements: Vec<Affine3A>,
+    /// FLAME's five joints (global, neck, jaw, eyes) placed as its head is placed on the body
+    /// (scaled, shifted), before the body's own skinning.
+    pub head_joints: Vec<Vec3>,
 }
 
 /// The identity part of a shape blend (template + shape directions), kept while the shape
@@ -351,6 +356,12 @@ impl EhmModel {
         for (&b, &h) in self.head_vertices.iter().zip(&extras.head_vertices) {
             shaped[b as usize] = h + shift;
         }
+        extras.head_joints.clear();
+        extras.head_joints.extend(
+            head.joints
+                .iter()
+                .map(|j| Vec3::from(j.translation) * head_scale + shift),
+        );
         let hand_scale = finite_scale(p.identity.hand_scale, &mut nonfinite);
         for (hand, centre) in self.hands.iter().zip(self.hand_centres) {
             for &v in hand {
@@ -418,11 +429,14 @@ impl EhmModel {
         })
     }
 
-    /// Whether parameter `i` (of [`Posable::parameter_names`]) is identity (SMPL-X or FLAME
-    /// shape) rather than expression or eyelids.
-    pub fn is_identity_parameter(&self, i: usize) -> bool {
-        let (s, e) = (self.n_shape, self.n_exp);
-        i < s || (s + e..2 * s + e).contains(&i)
+    /// Sets the shape and expression component counts, and the parameter names that follow from
+    /// them, for a model whose meshes were replaced in memory (each [`Skinned::shape_dirs`] must
+    /// then hold `n_shape + n_exp` directions).
+    pub fn set_counts(&mut self, n_shape: usize, n_exp: usize) {
+        self.n_shape = n_shape;
+        self.n_exp = n_exp;
+        self.parameter_names = Self::make_parameter_names(n_shape, n_exp);
+        self.shape_caches = ShapeCaches::default();
     }
 
     fn make_parameter_names(n_shape: usize, n_exp: usize) -> Vec<String> {
@@ -438,8 +452,14 @@ impl EhmModel {
 }
 
 impl Posable for EhmModel {
-    fn uses_ehm_identity(&self) -> bool {
-        true
+    fn ehm_identity(&self) -> Option<&EhmIdentity> {
+        Some(&self.identity)
+    }
+
+    /// SMPL-X or FLAME shape, rather than expression or eyelids.
+    fn is_identity_parameter(&self, i: usize) -> bool {
+        let (s, e) = (self.n_shape, self.n_exp);
+        i < s || (s + e..2 * s + e).contains(&i)
     }
 
     fn joint_names(&self) -> impl ExactSizeIterator<Item = &str> {
