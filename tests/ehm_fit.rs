@@ -499,3 +499,51 @@ fn the_demo_portrait_fits_on_ehm_as_on_the_default_body() {
         guava::reconstruct::SourceView::from_tracking(&tracking, &ehm, "fit").expect("reads");
     assert_eq!(back, view);
 }
+
+/// The face embedding finds the face on FLAME's real geometry (the synthetic EHM's head is
+/// FLAME's template as GUAVA ships it): with the head given FLAME's eyes (its eyeball vertices,
+/// 3931–4476 left and 4477–5022 right, regress the eye joints and are skinned to them) and skinned
+/// to the head, the face model sees a face on the rendered rest head and every used point lands
+/// on the head's skin, none on an eyeball.
+#[test]
+fn the_face_embeds_on_flames_real_head() {
+    let mut ehm = EhmModel::load(Path::new("tests/data/ehm_synthetic.npz")).expect("EHM");
+    const EYEBALLS: [std::ops::Range<usize>; 2] = [3931..4477, 4477..5023];
+    let uniform = |r: &std::ops::Range<usize>, map: &dyn Fn(usize) -> u32| {
+        r.clone()
+            .map(|v| (map(v), 1.0 / r.len() as f32))
+            .collect::<Vec<_>>()
+    };
+    let head_vertices = ehm.head_vertices.clone();
+    for (k, eyeball) in EYEBALLS.iter().enumerate() {
+        ehm.head.regressor[3 + k] = uniform(eyeball, &|v| v as u32);
+        ehm.body.regressor[23 + k] = uniform(eyeball, &|v| head_vertices[v]);
+    }
+    for (i, w) in ehm.head.weights.iter_mut().enumerate() {
+        let eye = EYEBALLS.iter().position(|r| r.contains(&i));
+        *w = vec![(eye.map_or(1, |k| 3 + k as u16), 1.0)];
+    }
+    for &b in &head_vertices {
+        ehm.body.weights[b as usize] = vec![(SMPLX_HEAD as u16, 1.0)];
+    }
+    let linear = ehm.linearised();
+    let embedding = embed_face(&linear, &mut face_model()).expect("a face on FLAME's head");
+    println!(
+        "face model presence on FLAME's rendered head: {:.2}",
+        embedding.presence
+    );
+    let head: std::collections::HashSet<u32> = head_vertices.iter().copied().collect();
+    let eyeball: std::collections::HashSet<u32> = EYEBALLS
+        .iter()
+        .flat_map(|r| r.clone().map(|v| head_vertices[v]))
+        .collect();
+    for p in &embedding.points {
+        assert!(
+            p.vertices
+                .iter()
+                .all(|v| head.contains(v) && !eyeball.contains(v)),
+            "{} is not on the head's skin",
+            p.name
+        );
+    }
+}

@@ -309,8 +309,8 @@ impl GuavaApp {
                 "GUAVA mode: EHM body open; open GUAVA's networks folder to reconstruct photos."
             }
             (true, Some(_)) => {
-                "GUAVA mode: photos with their tracking (.json beside them) are reconstructed by \
-                 GUAVA's networks on the EHM body."
+                "GUAVA mode: photos are reconstructed by GUAVA's networks on the EHM body, with \
+                 their tracking (.json beside them) or fitted to their keypoints."
             }
         });
         if let Some(n) = &self.networks {
@@ -1409,7 +1409,9 @@ fn guava_worker(
         r.texels,
         r.pruned
     );
-    let preview = TrackedPhoto::new(photo, &r.projected).map_or(Preview::None, Preview::Tracked);
+    let fit = r.fit.as_ref().map(|f| (f, guava::reconstruct::SOURCE_SIZE));
+    let preview =
+        TrackedPhoto::new(photo, &r.projected, fit).map_or(Preview::None, Preview::Tracked);
     let camera = (view.camera.view_from_world, view.camera.invtanfov());
     Ok(Loaded::Avatar(
         Box::new(avatar),

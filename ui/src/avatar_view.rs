@@ -131,14 +131,33 @@ pub struct TrackedPhoto {
     photo: Photo,
     /// Projected vertices in units of the photo's side, thinned for drawing.
     points: Vec<Vec2>,
+    /// When the view was fitted: the points it was fitted to, in units of the photo's side.
+    fitted_to: Option<Vec<Vec2>>,
 }
 
 /// Every how many projected vertices one is drawn (EHM has ~10k).
 const TRACKED_POINT_STRIDE: usize = 8;
 
 impl TrackedPhoto {
-    /// `None` when the photo cannot be read again.
-    pub fn new(photo: &Path, projected: &[Vec2]) -> Option<Self> {
+    /// `None` when the photo cannot be read again. `fit`, when the view was fitted to the
+    /// photo (`side` pixels square), adds the points it was fitted to.
+    pub fn new(
+        photo: &Path,
+        projected: &[Vec2],
+        fit: Option<(&guava::fit::FitReport, u32)>,
+    ) -> Option<Self> {
+        let fitted_to = fit.map(|(f, side)| {
+            let face = f.face.iter().flat_map(|x| &x.observed);
+            let hands = f.hands.iter().flat_map(|x| &x.observed);
+            let irises = f.gaze.iter().flat_map(|x| &x.observed);
+            f.observed
+                .iter()
+                .chain(face)
+                .chain(hands)
+                .chain(irises)
+                .map(|&p| p / side as f32)
+                .collect()
+        });
         Some(Self {
             photo: Photo::load(photo)?,
             points: projected
@@ -146,6 +165,7 @@ impl TrackedPhoto {
                 .step_by(TRACKED_POINT_STRIDE)
                 .copied()
                 .collect(),
+            fitted_to,
         })
     }
 
@@ -153,13 +173,24 @@ impl TrackedPhoto {
         let (rect, _) = self.photo.show(ui);
         let painter = ui.painter_at(rect);
         let colour = egui::Color32::from_rgba_unmultiplied(240, 60, 60, 160);
+        let at = |p: &Vec2| rect.min + egui::vec2(p.x, p.y) * rect.width();
         for p in &self.points {
-            painter.circle_filled(rect.min + egui::vec2(p.x, p.y) * rect.width(), 1.0, colour);
+            painter.circle_filled(at(p), 1.0, colour);
         }
-        ui.label(format!(
-            "red: the tracked body (every {TRACKED_POINT_STRIDE}th vertex) where the tracking puts \
-             it; GUAVA samples the photo there"
-        ));
+        let green = egui::Color32::from_rgb(60, 230, 60);
+        for p in self.fitted_to.iter().flatten() {
+            painter.circle_filled(at(p), 1.5, green);
+        }
+        ui.label(match self.fitted_to {
+            Some(_) => format!(
+                "red: the fitted body (every {TRACKED_POINT_STRIDE}th vertex); green: the \
+                 keypoints it was fitted to; GUAVA samples the photo at the red points"
+            ),
+            None => format!(
+                "red: the tracked body (every {TRACKED_POINT_STRIDE}th vertex) where the tracking \
+                 puts it; GUAVA samples the photo there"
+            ),
+        });
     }
 }
 
