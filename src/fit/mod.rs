@@ -148,6 +148,8 @@ pub struct FitReport {
     /// pixels).
     pub observed: Vec<Vec2>,
     pub fitted: Vec<Vec2>,
+    /// What each used body keypoint is on the body, to re-project it when the pose is adjusted.
+    pub surface: Vec<Landmark>,
     /// The face stage, when it ran.
     pub face: Option<FaceFitReport>,
     /// Why the face stage did not run, when it did not.
@@ -500,10 +502,12 @@ pub fn fit_keypoints(
     let landmark = |name: &str| body.landmarks.iter().position(|l| l.name == name);
     let mut observations = Vec::new();
     let mut names = Vec::new();
+    let mut surface = Vec::new();
     for k in keypoints.iter().filter(|k| k.confidence >= MIN_CONFIDENCE) {
         let l = landmark(k.name).ok_or_else(|| FitError::MissingOnBody(k.name.into()))?;
         observations.push((Target::Point(l), k.pixel, (k.confidence as f64).sqrt()));
         names.push(k.name);
+        surface.push(body.landmarks[l].clone());
     }
     let has = |n: &str| names.contains(&n);
     if observations.len() < 4 || !has("left_shoulder") || !has("right_shoulder") {
@@ -794,6 +798,7 @@ pub fn fit_keypoints(
             .map(|o| o.1)
             .collect(),
         fitted: stage.projected(&result, 0..body_observed),
+        surface,
         face: face_report,
         face_skipped: None,
         hands: hands_report,

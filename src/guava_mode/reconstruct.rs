@@ -20,7 +20,7 @@ use crate::avatar::{Avatar, AvatarKind, LocalGaussians, UvGaussians};
 use crate::body::{EhmModel, Posable, PosedBody};
 use crate::camera::Camera;
 use crate::fit::{FitReport, fit_ehm_detections};
-use crate::keypoints::{Detections, Landmarkers};
+use crate::keypoints::{Detections, Keypoint, Landmarkers};
 use crate::reconstruct::raster::rasterize;
 use crate::reconstruct::{
     ReconstructError, SOURCE_SIZE, SourceImage, SourceView, Stage, StageClock, Tracked, UvMap,
@@ -45,6 +45,8 @@ pub struct GuavaReport {
     pub projected: Vec<Vec2>,
     /// How the source view was fitted to the photo, when it was.
     pub fit: Option<FitReport>,
+    /// The pose model's body keypoints on the photo, when it ran.
+    pub keypoints: Vec<Keypoint>,
 }
 
 /// The EHM body's texel map at `size`²: the reference's own (OpenCV's fill, stored by
@@ -307,6 +309,7 @@ pub fn reconstruct_guava_file(
         report.timings.insert(0, (Stage::Fit, fit_time));
     }
     report.fit = fit;
+    report.keypoints = detections.map(|d| d.pose.keypoints).unwrap_or_default();
     Ok((avatar, report, view))
 }
 

@@ -559,13 +559,26 @@ impl GuavaApp {
 
     /// Reconstructs the avatar's source photo again with `view` (the fit adjusted by hand).
     pub fn reconstruct_with_pose(&mut self, photo: PathBuf, view: guava::reconstruct::SourceView) {
-        let Some(model) = self.template_body() else {
-            return;
+        let Some(body) = self.body.as_ref().map(|b| b.model.clone()) else {
+            return self.error("no body to reconstruct on".into());
         };
+        let networks = self.networks.as_ref().map(|n| n.models.clone());
         let worker_photo = photo.clone();
         self.spawn_job(photo, "reading", move |stage, cancel| {
             let given = guava::reconstruct::Tracked::Given(view);
-            reconstruct_worker(&model, &worker_photo, given, stage, cancel)
+            match &*body {
+                ViewerBody::Template(model) => {
+                    reconstruct_worker(model, &worker_photo, given, stage, cancel)
+                }
+                ViewerBody::Ehm(model) => guava_worker(
+                    model,
+                    networks.as_deref(),
+                    &worker_photo,
+                    given,
+                    stage,
+                    cancel,
+                ),
+            }
         });
     }
 
@@ -709,13 +722,12 @@ impl GuavaApp {
             FitAction::SaveTracking => {
                 let photo = source.photo.clone();
                 let name = file_name(&photo);
-                // A fit preview exists only for avatars of a body template.
-                let Some(template) = body.model.template() else {
-                    return;
-                };
                 let tracking = view.to_tracking(
-                    template,
-                    &format!("fitted in guava-viewer to {name}, adjusted by hand; default body"),
+                    &*body.model,
+                    &format!(
+                        "fitted in guava-viewer to {name}, adjusted by hand; {}",
+                        body.model.name()
+                    ),
                 );
                 let Some(path) = rfd::FileDialog::new()
                     .add_filter("tracking", &["json"])
@@ -1304,8 +1316,15 @@ fn reconstruct_worker(
     )
     .map_err(|e| e.to_string())?;
     let camera = (view.camera.view_from_world, view.camera.invtanfov());
-    let preview = SourcePreview::new(body, photo, &report, view)
-        .map_or(Preview::None, |p| Preview::Fit(Box::new(p)));
+    let preview = SourcePreview::new(
+        body,
+        &body.landmarks,
+        photo,
+        &report.keypoints,
+        report.fit.as_ref(),
+        view,
+    )
+    .map_or(Preview::None, |p| Preview::Fit(Box::new(p)));
     Ok(Loaded::Avatar(
         Box::new(avatar),
         Some(default_summary(&report)),
@@ -1409,10 +1428,12 @@ fn guava_worker(
         r.texels,
         r.pruned
     );
-    let fit = r.fit.as_ref().map(|f| (f, guava::reconstruct::SOURCE_SIZE));
-    let preview =
-        TrackedPhoto::new(photo, &r.projected, fit).map_or(Preview::None, Preview::Tracked);
     let camera = (view.camera.view_from_world, view.camera.invtanfov());
+    let preview = match &r.fit {
+        Some(fit) => SourcePreview::new(body, &fit.surface, photo, &r.keypoints, Some(fit), view)
+            .map_or(Preview::None, |p| Preview::Fit(Box::new(p))),
+        None => TrackedPhoto::new(photo, &r.projected).map_or(Preview::None, Preview::Tracked),
+    };
     Ok(Loaded::Avatar(
         Box::new(avatar),
         Some(summary),

@@ -6,10 +6,11 @@ use std::sync::Arc;
 
 use glam::Vec2;
 use guava::avatar::{Avatar, Rig};
-use guava::body::{BodyModel, Posable, PosedBody};
-use guava::fit::BodyPoint;
+use guava::body::{Landmark, Posable, PosedBody};
+use guava::fit::{BodyPoint, FitReport};
 use guava::gaussians::GaussianCloud;
-use guava::reconstruct::{Report, SourceImage, SourceView};
+use guava::keypoints::Keypoint;
+use guava::reconstruct::{SourceImage, SourceView};
 
 use crate::body_panel::BodyState;
 use crate::viewport::SceneRef;
@@ -84,9 +85,9 @@ impl AvatarState {
 /// What the avatar panel shows of the photo an avatar was made from.
 pub enum Preview {
     None,
-    /// The default reconstruction's keypoints and fit, adjustable by hand.
+    /// The keypoints and the fit (or the tracked body's landmarks), adjustable by hand.
     Fit(Box<SourcePreview>),
-    /// GUAVA mode: the tracked body over the photo.
+    /// GUAVA mode with a tracking file: the tracked body over the photo.
     Tracked(TrackedPhoto),
 }
 
@@ -131,33 +132,14 @@ pub struct TrackedPhoto {
     photo: Photo,
     /// Projected vertices in units of the photo's side, thinned for drawing.
     points: Vec<Vec2>,
-    /// When the view was fitted: the points it was fitted to, in units of the photo's side.
-    fitted_to: Option<Vec<Vec2>>,
 }
 
 /// Every how many projected vertices one is drawn (EHM has ~10k).
 const TRACKED_POINT_STRIDE: usize = 8;
 
 impl TrackedPhoto {
-    /// `None` when the photo cannot be read again. `fit`, when the view was fitted to the
-    /// photo (`side` pixels square), adds the points it was fitted to.
-    pub fn new(
-        photo: &Path,
-        projected: &[Vec2],
-        fit: Option<(&guava::fit::FitReport, u32)>,
-    ) -> Option<Self> {
-        let fitted_to = fit.map(|(f, side)| {
-            let face = f.face.iter().flat_map(|x| &x.observed);
-            let hands = f.hands.iter().flat_map(|x| &x.observed);
-            let irises = f.gaze.iter().flat_map(|x| &x.observed);
-            f.observed
-                .iter()
-                .chain(face)
-                .chain(hands)
-                .chain(irises)
-                .map(|&p| p / side as f32)
-                .collect()
-        });
+    /// `None` when the photo cannot be read again.
+    pub fn new(photo: &Path, projected: &[Vec2]) -> Option<Self> {
         Some(Self {
             photo: Photo::load(photo)?,
             points: projected
@@ -165,7 +147,6 @@ impl TrackedPhoto {
                 .step_by(TRACKED_POINT_STRIDE)
                 .copied()
                 .collect(),
-            fitted_to,
         })
     }
 
@@ -173,24 +154,13 @@ impl TrackedPhoto {
         let (rect, _) = self.photo.show(ui);
         let painter = ui.painter_at(rect);
         let colour = egui::Color32::from_rgba_unmultiplied(240, 60, 60, 160);
-        let at = |p: &Vec2| rect.min + egui::vec2(p.x, p.y) * rect.width();
         for p in &self.points {
-            painter.circle_filled(at(p), 1.0, colour);
+            painter.circle_filled(rect.min + egui::vec2(p.x, p.y) * rect.width(), 1.0, colour);
         }
-        let green = egui::Color32::from_rgb(60, 230, 60);
-        for p in self.fitted_to.iter().flatten() {
-            painter.circle_filled(at(p), 1.5, green);
-        }
-        ui.label(match self.fitted_to {
-            Some(_) => format!(
-                "red: the fitted body (every {TRACKED_POINT_STRIDE}th vertex); green: the \
-                 keypoints it was fitted to; GUAVA samples the photo at the red points"
-            ),
-            None => format!(
-                "red: the tracked body (every {TRACKED_POINT_STRIDE}th vertex) where the tracking \
-                 puts it; GUAVA samples the photo there"
-            ),
-        });
+        ui.label(format!(
+            "red: the tracked body (every {TRACKED_POINT_STRIDE}th vertex) where the tracking puts \
+             it; GUAVA samples the photo there"
+        ));
     }
 }
 
@@ -202,8 +172,8 @@ pub struct SourcePreview {
     /// The photo and the pose and camera its avatar was made with.
     pub photo: PathBuf,
     pub view: SourceView,
-    /// Per body keypoint: where the model saw it, its confidence, the body landmark's index.
-    keypoints: Vec<(Vec2, f32, usize)>,
+    /// Per body keypoint: where the model saw it, its confidence, its place on the body.
+    keypoints: Vec<(Vec2, f32, BodyPoint)>,
     /// Face-mesh and hand points the fit used: where the models saw them, their place on the body.
     detail: Vec<(Vec2, BodyPoint)>,
     /// Where the shown pose puts the keypoints' landmarks, then the detail points (pixels).
@@ -227,40 +197,39 @@ pub enum FitAction {
 }
 
 impl SourcePreview {
-    /// `None` when the pose model did not run (a photo with alpha and tracking).
-    pub fn new(body: &BodyModel, photo: &Path, report: &Report, view: SourceView) -> Option<Self> {
-        if report.keypoints.is_empty() {
+    /// The photo with the pose model's `keypoints` (matched by name to `landmarks`, the body's
+    /// keypoint landmarks) and the `fit`'s other points, on `body` posed by `view`. `None` when
+    /// the pose model did not run (a photo with alpha and tracking) or the photo cannot be read.
+    pub fn new(
+        body: &impl Posable,
+        landmarks: &[Landmark],
+        photo: &Path,
+        keypoints: &[Keypoint],
+        fit: Option<&FitReport>,
+        view: SourceView,
+    ) -> Option<Self> {
+        if keypoints.is_empty() {
             return None;
         }
-        let keypoints = report
-            .keypoints
+        let keypoints = keypoints
             .iter()
             .filter_map(|k| {
-                let l = body.landmarks.iter().position(|l| l.name == k.name)?;
-                Some((k.pixel, k.confidence, l))
+                let l = landmarks.iter().find(|l| l.name == k.name)?;
+                Some((k.pixel, k.confidence, BodyPoint::Surface(l.clone())))
             })
             .collect();
-        let face = report
-            .fit
-            .iter()
-            .filter_map(|f| f.face.as_ref())
-            .flat_map(|f| {
-                let surface = f.surface.iter().cloned().map(BodyPoint::Surface);
-                f.observed.iter().copied().zip(surface)
-            });
-        let hands = report
-            .fit
-            .iter()
-            .filter_map(|f| f.hands.as_ref())
+        let face = fit.and_then(|f| f.face.as_ref()).into_iter().flat_map(|f| {
+            let surface = f.surface.iter().cloned().map(BodyPoint::Surface);
+            f.observed.iter().copied().zip(surface)
+        });
+        let hands = fit
+            .and_then(|f| f.hands.as_ref())
+            .into_iter()
             .flat_map(|h| h.observed.iter().copied().zip(h.targets.iter().cloned()));
-        let irises = report
-            .fit
-            .iter()
-            .filter_map(|f| f.gaze.as_ref())
-            .flat_map(|g| {
-                let pupils = g.pupils.iter().cloned().map(BodyPoint::Surface);
-                g.observed.iter().copied().zip(pupils)
-            });
+        let irises = fit.and_then(|f| f.gaze.as_ref()).into_iter().flat_map(|g| {
+            let pupils = g.pupils.iter().cloned().map(BodyPoint::Surface);
+            g.observed.iter().copied().zip(pupils)
+        });
         let detail = face.chain(hands).chain(irises).collect();
         let mut preview = Self {
             photo_image: Photo::load(photo)?,
@@ -270,12 +239,12 @@ impl SourcePreview {
             detail,
             fitted: Vec::new(),
             fitted_for: None,
-            rms_px: report.fit.as_ref().map(|f| f.rms_px),
+            rms_px: fit.map(|f| f.rms_px),
             editing: false,
         };
         let mut posed = PosedBody::default();
         body.pose(&preview.view.pose, &mut posed).ok()?;
-        preview.fitted = preview.project_all(body, &posed);
+        preview.fitted = preview.project_all(&posed);
         Some(preview)
     }
 
@@ -283,15 +252,14 @@ impl SourcePreview {
         self.editing
     }
 
-    fn project_all(&self, body: &BodyModel, posed: &PosedBody) -> Vec<Vec2> {
+    fn project_all(&self, posed: &PosedBody) -> Vec<Vec2> {
         let camera = &self.view.camera;
-        let marks = body.landmark_positions(&posed.vertices);
-        let landmarks = self.keypoints.iter().map(|k| marks[k.2]);
-        let detail = self.detail.iter().map(|d| d.1.on(posed));
+        let landmarks = self.keypoints.iter().map(|k| &k.2);
+        let detail = self.detail.iter().map(|d| &d.1);
         landmarks
             .chain(detail)
-            .map(|x| {
-                let q = camera.project(x);
+            .map(|p| {
+                let q = camera.project(p.on(posed));
                 Vec2::new(q.x, q.y)
             })
             .collect()
@@ -300,11 +268,10 @@ impl SourcePreview {
     /// The photo with the points and the fit's controls; while editing, the red points follow
     /// `body`'s pose.
     pub fn ui(&mut self, ui: &mut egui::Ui, body: &mut BodyState) -> Option<FitAction> {
-        let model = body.model.clone();
-        if let (true, Some(template)) = (self.editing, model.template()) {
+        if self.editing {
             let (posed, generation) = body.posed();
             if self.fitted_for != Some(generation) {
-                self.fitted = self.project_all(template, posed);
+                self.fitted = self.project_all(posed);
                 self.fitted_for = Some(generation);
             }
         }
@@ -378,10 +345,8 @@ impl SourcePreview {
         if !editing {
             // Back to the pose the avatar was made with.
             let mut posed = PosedBody::default();
-            if let Some(template) = body.model.template()
-                && template.pose(&self.view.pose, &mut posed).is_ok()
-            {
-                self.fitted = self.project_all(template, &posed);
+            if body.model.pose(&self.view.pose, &mut posed).is_ok() {
+                self.fitted = self.project_all(&posed);
             }
         }
         self.editing = editing;

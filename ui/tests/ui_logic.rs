@@ -551,5 +551,23 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
         label.contains("pose and camera fitted to 11 keypoints"),
         "{label}"
     );
+    h.run();
+    h.get_by_label_contains("red: the fitted body's landmarks");
+    // The fit is adjusted by hand on EHM's sliders and the photo reconstructed with it.
+    h.state_mut().fit_action(FitAction::StartEditing);
+    assert!(h.state().editing_fit());
+    let body_state = h.state_mut().body_mut().expect("body");
+    let head = guava::body::Posable::joint_names(body_state.model.as_ref())
+        .position(|n| n == "head")
+        .expect("head");
+    body_state.pose.rotations[head].y += 0.4;
+    frame(&mut h);
+    h.state_mut().fit_action(FitAction::Reconstruct);
+    wait_until(&mut h, |app| {
+        app.avatar_info()
+            .is_some_and(|(l, _)| l.contains("portrait.png") && !l.contains("fitted to"))
+    });
+    let (label, _) = h.state().avatar_info().expect("reconstructed");
+    assert!(label.starts_with("GUAVA reconstruction"), "{label}");
     std::fs::remove_dir_all(&dir).ok();
 }
