@@ -7,8 +7,9 @@
 //! at the body's front, so its distance sets the scale), the rotations of [`FITTED_JOINTS`] and
 //! the shape coefficients (within their ranges), against the pose model's body keypoints.
 //! **Face**, when the face model found a face: head and neck, the [`FITTED_EXPRESSIONS`] (on a
-//! body without ARKit units, its expression components and its jaw joint), the head's size
-//! ([`HEAD_SIZE`], where the body has it) and a small image offset per facial feature, against
+//! body without ARKit units, its expression components and its jaw joint), the head's shape
+//! (the shape targets that leave the limbs in place: [`HEAD_SIZE`] on the default body, FLAME's
+//! shape on EHM) and a small image offset per facial feature, against
 //! the face mesh's points on the body ([`FaceEmbedding`]), the body keypoints kept in.
 //! **Hands**, for each hand found: forearm, wrist and fingers against its 21 points
 //! ([`hand_targets`]). **Gaze**, after the face stage, for each iris found: the eye joint
@@ -76,8 +77,9 @@ pub const FITTED_EXPRESSIONS: [&str; 14] = [
 /// mouth opens by its jaw joint rather than an ARKit `jawOpen` unit (EHM: FLAME's jaw).
 const FACE_JOINTS: [&str; 2] = ["neck01", "head"];
 const JAW_JOINT: &str = "jaw";
-/// The person's face is not the default body's: the face stage sizes the body's head to it
-/// ([`HEAD_SIZE`], a shape target, so texture mapping sees the face where the photo has it) and
+/// The person's face is not the default body's: the face stage shapes the body's head to it (its
+/// [`face_shapes`]: the default body's [`HEAD_SIZE`], EHM's FLAME shape components; so texture
+/// mapping sees the face where the photo has it) and
 /// lets each feature (lips, eyes, brows, nose) sit a little apart in the image from where the
 /// default face has it, so that expressions explain how features are shaped, not where they are.
 /// An offset pixel costs this fraction of one point's pixel.
@@ -411,6 +413,63 @@ fn fitted_expressions(body: &BodyModel) -> impl Iterator<Item = usize> + '_ {
     named.into_iter().chain(all.into_iter().flatten())
 }
 
+/// A shape target that moves no limb keypoint by this share of its largest vertex displacement
+/// shapes the head alone ([`face_shapes`]; the default body's head size moves its shoulder
+/// landmarks by 3 % of what it moves the head, its phenotypes by half or more).
+const HEAD_SHAPE_LIMB_SHARE: f32 = 0.1;
+/// The limb keypoints.
+const LIMB_KEYPOINTS: [&str; 12] = [
+    "left_shoulder",
+    "right_shoulder",
+    "left_elbow",
+    "right_elbow",
+    "left_wrist",
+    "right_wrist",
+    "left_hip",
+    "right_hip",
+    "left_knee",
+    "right_knee",
+    "left_ankle",
+    "right_ankle",
+];
+
+/// The shape targets the face stage fits: those that move every limb keypoint's landmark by
+/// less than [`HEAD_SHAPE_LIMB_SHARE`] of their largest vertex displacement (the default body's
+/// [`HEAD_SIZE`], which stretches the neck a little; EHM's FLAME shape components), whose size
+/// and shape only the face points tell.
+fn face_shapes(body: &BodyModel) -> impl Iterator<Item = usize> + '_ {
+    let limbs: Vec<&Landmark> = body
+        .landmarks
+        .iter()
+        .filter(|l| LIMB_KEYPOINTS.contains(&l.name.as_str()))
+        .collect();
+    body.targets_in(TargetGroup::Shape)
+        .filter(move |(_, t)| {
+            let deltas: std::collections::HashMap<u32, Vec3> = t
+                .vertices
+                .iter()
+                .copied()
+                .zip(t.deltas.iter().copied())
+                .collect();
+            let largest = t.deltas.iter().map(|d| d.length()).fold(0.0, f32::max);
+            let moved = |l: &Landmark| {
+                let d: Vec3 = l
+                    .vertices
+                    .iter()
+                    .zip(&l.weights)
+                    .map(|(v, &w)| w * deltas.get(v).copied().unwrap_or(Vec3::ZERO))
+                    .sum();
+                d.length()
+            };
+            !limbs.is_empty()
+                && largest > 0.0
+                && limbs
+                    .iter()
+                    .all(|l| moved(l) < HEAD_SHAPE_LIMB_SHARE * largest)
+        })
+        .map(|(i, _)| i)
+}
+
 /// Fits the body to what the keypoint models found on a photo: body keypoints, and the face mesh
 /// when there is one (placed on the body by [`embed_face`] with `face_model`). A face that cannot
 /// be used leaves the fit to the body keypoints and says why in [`FitReport::face_skipped`].
@@ -654,10 +713,12 @@ pub fn fit_keypoints(
                 expression_prior,
             )
         }));
-        if let Some(t) = body.target_index(HEAD_SIZE) {
-            let range = body.targets[t].range;
-            unknowns.push((Unknown::Coefficient(t, range), SHAPE_PRIOR_PX));
-        }
+        unknowns.extend(face_shapes(body).map(|t| {
+            (
+                Unknown::Coefficient(t, body.targets[t].range),
+                SHAPE_PRIOR_PX,
+            )
+        }));
         for g in 0..FACE_FEATURES.len() {
             unknowns.extend((0..2).map(|k| (Unknown::FeatureOffset(g, k), FEATURE_OFFSET_PRIOR)));
         }
