@@ -1,14 +1,14 @@
 //! `guava bench reconstruct`: the default reconstruction of a synthetic photo of the default body
 //! on one CPU thread, per stage (the UV map is built once per body and timed apart), then
 //! animating the avatar for one frame of the demo motion (posing + rigging its Gaussians), and
-//! the single-image fit of the demo portrait.
+//! the single-image fit of the demo portrait (also on an EHM body, through its linear body).
 
 use std::time::{Duration, Instant};
 
 use super::body::cpu_name;
 use super::median;
 use crate::avatar::Rig;
-use crate::body::{BodyModel, BodyPose, PosedBody};
+use crate::body::{BodyModel, BodyPose, EhmModel, PosedBody};
 use crate::fit::{FitInput, embed_face, fit_keypoints};
 use crate::gaussians::GaussianCloud;
 use crate::keypoints::Landmarkers;
@@ -24,6 +24,10 @@ pub struct ReconstructBenchArgs {
     /// Timed repetitions (after 2 warm-up runs).
     #[arg(long, default_value_t = 20)]
     pub iterations: usize,
+    /// Also time the fit of the demo portrait on this EHM body (tools/convert_ehm.py), with
+    /// the making of its linear body.
+    #[arg(long)]
+    pub ehm: Option<std::path::PathBuf>,
 }
 
 pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
@@ -97,7 +101,27 @@ pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
         median(pose_ms),
         median(rig_ms)
     );
-    fit_demo_portrait(&body, args.iterations)
+    fit_demo_portrait(&body, args.iterations)?;
+    if let Some(path) = &args.ehm {
+        let ehm = EhmModel::load(path)?;
+        let mut linearise_ms = Vec::new();
+        let mut linear = None;
+        for _ in 0..args.iterations.min(10) {
+            let t = Instant::now();
+            linear = Some(ehm.linearised());
+            linearise_ms.push(ms(t.elapsed()));
+        }
+        let linear = linear.unwrap_or_else(|| ehm.linearised());
+        println!(
+            "EHM {:?}: its linear body for fitting made in {:.1} ms ({} vertices, {} targets)",
+            ehm.name,
+            median(linearise_ms),
+            linear.vertices.len(),
+            linear.targets.len()
+        );
+        fit_demo_portrait(&linear, args.iterations)?;
+    }
+    Ok(())
 }
 
 /// Keypoints (ONNX Runtime, its default CPU threads) and the fit (one thread) on the demo portrait.
@@ -112,16 +136,17 @@ fn fit_demo_portrait(body: &BodyModel, iterations: usize) -> anyhow::Result<()> 
         let found = models.detect(&source)?;
         let t1 = Instant::now();
         // What fit_detections does, timed in its two parts.
-        let embedding = embed_face(body, &mut models.face)?;
+        let embedding = embed_face(body, &mut models.face);
         let t2 = Instant::now();
-        let face = found.face.as_ref().map(|f| (f, &embedding));
+        let face = found.face.as_ref().zip(embedding.as_ref().ok());
         let input = FitInput {
             keypoints: &found.pose.keypoints,
             face,
             hands: &found.hands,
             irises: &found.irises,
         };
-        let (_, report) = fit_keypoints(body, &input, source.size)?;
+        let (_, mut report) = fit_keypoints(body, &input, source.size)?;
+        report.face_skipped = embedding.err().map(|e| e.to_string());
         if i > 0 {
             keypoint_ms.push(ms(t1 - t0));
             embed_ms.push(ms(t2 - t1));
@@ -131,7 +156,8 @@ fn fit_demo_portrait(body: &BodyModel, iterations: usize) -> anyhow::Result<()> 
     }
     let report = last.expect("ran");
     println!(
-        "fit of the demo portrait: keypoint models {:.1} ms, face embedding on the body {:.1} ms, fit stages {:.1} ms",
+        "fit of the demo portrait on {}: keypoint models {:.1} ms, face embedding on the body {:.1} ms, fit stages {:.1} ms",
+        body.name,
         median(keypoint_ms.clone()),
         median(embed_ms),
         median(fit_ms.clone())

@@ -45,16 +45,18 @@ const JOINT_KEYPOINTS: [&str; 12] = [
 ];
 /// Ears are the head's outermost points within this height of the eyes (metres).
 const EAR_BAND: f32 = 0.03;
+const REST_FITS: &str = "a pose made by BodyPose::rest of the model has its lengths";
 /// An eyeball's vertices within this fraction of its radius from its front are its iris.
 const IRIS_DEPTH: f32 = 0.4;
 
 impl EhmModel {
     /// The linear body (see the module doc), with this model's identity.
     pub fn linearised(&self) -> BodyModel {
-        let base = self
-            .params_from_pose(&BodyPose::rest(self))
-            .map(|p| self.rest_parts(&p))
-            .expect("a rest pose of the model itself has its lengths");
+        let base = self.rest_parts(
+            &self
+                .params_from_pose(&BodyPose::rest(self))
+                .expect(REST_FITS),
+        );
         let n = base.vertices.len();
 
         let names: Vec<&str> = self.parameter_names().collect();
@@ -79,10 +81,7 @@ impl EhmModel {
             };
             let mut unit = BodyPose::rest(self);
             unit.coefficients[i] = 1.0;
-            let Ok(p) = self.params_from_pose(&unit) else {
-                continue;
-            };
-            let moved = self.rest_parts(&p);
+            let moved = self.rest_parts(&self.params_from_pose(&unit).expect(REST_FITS));
             let (vertices, deltas) = (0..n)
                 .map(|v| (v as u32, moved.vertices[v] - base.vertices[v]))
                 .filter(|(_, d)| *d != Vec3::ZERO)
