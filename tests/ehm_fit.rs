@@ -547,3 +547,49 @@ fn the_face_embeds_on_flames_real_head() {
         );
     }
 }
+
+/// Hands through GUAVA mode's path: the default body drawn waving (`tests/data/drawn_wave.png`,
+/// see `fit::the_drawn_wave_fits_where_it_was_drawn`) fitted on the dressed body finds both hands
+/// and fits their 42 points (SMPL-X's finger joints, fingertips past them) as well as the default
+/// body's fit (within 1.5× its RMS plus 2 px), and raises the waving hand above the head.
+#[test]
+fn the_drawn_wave_hands_fit_on_ehm() {
+    use guava::fit::{fit_detections, fit_ehm_detections};
+    use guava::reconstruct::SourceImage;
+    let ehm = anny_as_ehm();
+    let mut models =
+        guava::keypoints::Landmarkers::load(OnnxRuntime::load().expect("ONNX Runtime"))
+            .expect("shipped models");
+    let image = SourceImage::load(Path::new("tests/data/drawn_wave.png")).expect("drawing");
+    let found = models.detect(&image).expect("keypoints");
+    let (view, report) =
+        fit_ehm_detections(&ehm, &found, &mut models.face, image.size).expect("EHM fit");
+    let body = BodyModel::default_body().expect("body");
+    let (_, default) =
+        fit_detections(&body, &found, &mut models.face, image.size).expect("default fit");
+    let hands = |r: &guava::fit::FitReport| r.hands.as_ref().map(|h| (h.hands, h.rms_px));
+    println!(
+        "EHM path: body {:.1} px, hands {:?}; default body: body {:.1} px, hands {:?}",
+        report.rms_px,
+        hands(&report),
+        default.rms_px,
+        hands(&default)
+    );
+    let ((n, rms), (_, default_rms)) = (
+        hands(&report).expect("hands fitted"),
+        hands(&default).expect("hands"),
+    );
+    assert_eq!(n, 2);
+    assert!(rms < 1.5 * default_rms + 2.0, "{rms} vs {default_rms}");
+    let mut posed = PosedBody::default();
+    ehm.pose(&view.pose, &mut posed).expect("pose");
+    let joint = |name: &str| {
+        let j = SMPLX_JOINTS.iter().position(|&n| n == name).expect(name);
+        view.camera.project(Vec3::from(posed.joints[j].translation))
+    };
+    let (wrist, head) = (joint("right_wrist"), joint("head"));
+    assert!(
+        wrist.y < head.y,
+        "the waving hand is raised: wrist {wrist}, head {head}"
+    );
+}
