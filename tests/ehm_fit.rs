@@ -6,15 +6,13 @@
 //! of its units as PCA components and its blinks as eyelids. Posed by [`EhmModel::forward`], its
 //! skinning and landmarks mean what they mean on a person, so known answers can be recovered.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use guava::body::{
     BodyModel, BodyPose, EhmExtras, EhmModel, Landmark, Posable, PosedBody, SMPLX_JOINTS, Skinned,
     TargetGroup, smplx_to_default,
 };
-use guava::fit::{FACE_FIT_POINTS, FitInput, embed_face, fit_keypoints};
-use guava::keypoints::{
-    COCO_FROM_MEDIAPIPE, FACE_POINTS, FaceLandmarker, FaceLandmarks, Keypoint, Roi,
-};
+use guava::fit::{FitInput, embed_face, fit_keypoints};
+use guava::keypoints::{COCO_FROM_MEDIAPIPE, FaceLandmarker, Keypoint};
 use guava::onnx::OnnxRuntime;
 use guava::reconstruct::synthetic;
 use std::path::Path;
@@ -381,32 +379,22 @@ fn fit_recovers_a_known_ehm_pose() {
             .find(|l| l.name == name)
             .unwrap_or_else(|| panic!("{name}: no landmark on the linear body"))
     };
-    let pixel = |x: Vec3| {
-        let q = camera.project(x);
-        Vec2::new(q.x, q.y)
-    };
+    let surface: Vec<Landmark> = COCO_FROM_MEDIAPIPE
+        .iter()
+        .map(|&(name, _)| landmark(name).clone())
+        .collect();
+    let pixels = crate::fit::project_on(&truth, &camera, &surface);
     let keypoints: Vec<Keypoint> = COCO_FROM_MEDIAPIPE
         .iter()
-        .map(|&(name, _)| Keypoint {
+        .zip(pixels)
+        .map(|(&(name, _), pixel)| Keypoint {
             name,
-            pixel: pixel(at(landmark(name), &truth)),
+            pixel,
             confidence: 1.0,
         })
         .collect();
     let embedding = embed_face(&linear, &mut face_model()).expect("the dressed face embeds");
-    let mut points = vec![Vec2::ZERO; FACE_POINTS];
-    for (l, &i) in embedding.points.iter().zip(FACE_FIT_POINTS) {
-        points[i] = pixel(at(l, &truth));
-    }
-    let face = FaceLandmarks {
-        points,
-        presence: 1.0,
-        roi: Roi {
-            centre: Vec2::ZERO,
-            side: 1.0,
-            angle: 0.0,
-        },
-    };
+    let face = crate::fit::face_on(&truth, &embedding, &camera);
     let input = FitInput {
         keypoints: &keypoints,
         face: Some((&face, &embedding)),

@@ -523,6 +523,15 @@ fn project_points(
 ) -> Vec<Vec2> {
     let mut posed = PosedBody::default();
     body.pose(pose, &mut posed).expect("pose");
+    project_on(&posed.vertices, camera, points)
+}
+
+/// Where `points` lie on posed `vertices`, projected.
+pub(crate) fn project_on(
+    vertices: &[Vec3],
+    camera: &guava::camera::Camera,
+    points: &[guava::body::Landmark],
+) -> Vec<Vec2> {
     points
         .iter()
         .map(|l| {
@@ -530,7 +539,7 @@ fn project_points(
                 .vertices
                 .iter()
                 .zip(&l.weights)
-                .map(|(&v, &w)| w * posed.vertices[v as usize])
+                .map(|(&v, &w)| w * vertices[v as usize])
                 .sum();
             let q = camera.project(x);
             Vec2::new(q.x, q.y)
@@ -545,8 +554,19 @@ fn project_face(
     pose: &BodyPose,
     camera: &guava::camera::Camera,
 ) -> FaceLandmarks {
+    let mut posed = PosedBody::default();
+    body.pose(pose, &mut posed).expect("pose");
+    face_on(&posed.vertices, embedding, camera)
+}
+
+/// [`project_face`] on posed `vertices`.
+pub(crate) fn face_on(
+    vertices: &[Vec3],
+    embedding: &guava::fit::FaceEmbedding,
+    camera: &guava::camera::Camera,
+) -> FaceLandmarks {
     let mut points = vec![Vec2::ZERO; FACE_POINTS];
-    let projected = project_points(body, pose, camera, &embedding.points);
+    let projected = project_on(vertices, camera, &embedding.points);
     for (p, &i) in projected.into_iter().zip(FACE_FIT_POINTS) {
         points[i] = p;
     }

@@ -35,7 +35,7 @@ use crate::body::{BodyModel, BodyPose, EhmModel, HEAD_SIZE, Landmark, PointPoser
 use crate::camera::{Camera, GUAVA_INVTANFOV};
 use crate::keypoints::{
     Detections, FACE_EYE_CORNERS, FaceLandmarker, FaceLandmarks, HandLandmarks, Iris, Keypoint,
-    Side,
+    Side, coco_limb_keypoints,
 };
 use crate::reconstruct::SourceView;
 
@@ -417,21 +417,6 @@ fn fitted_expressions(body: &BodyModel) -> impl Iterator<Item = usize> + '_ {
 /// shapes the head alone ([`face_shapes`]; the default body's head size moves its shoulder
 /// landmarks by 3 % of what it moves the head, its phenotypes by half or more).
 const HEAD_SHAPE_LIMB_SHARE: f32 = 0.1;
-/// The limb keypoints.
-const LIMB_KEYPOINTS: [&str; 12] = [
-    "left_shoulder",
-    "right_shoulder",
-    "left_elbow",
-    "right_elbow",
-    "left_wrist",
-    "right_wrist",
-    "left_hip",
-    "right_hip",
-    "left_knee",
-    "right_knee",
-    "left_ankle",
-    "right_ankle",
-];
 
 /// The shape targets the face stage fits: those that move every limb keypoint's landmark by
 /// less than [`HEAD_SHAPE_LIMB_SHARE`] of their largest vertex displacement (the default body's
@@ -441,7 +426,7 @@ fn face_shapes(body: &BodyModel) -> impl Iterator<Item = usize> + '_ {
     let limbs: Vec<&Landmark> = body
         .landmarks
         .iter()
-        .filter(|l| LIMB_KEYPOINTS.contains(&l.name.as_str()))
+        .filter(|l| coco_limb_keypoints().any(|n| n == l.name))
         .collect();
     body.targets_in(TargetGroup::Shape)
         .filter(move |(_, t)| {

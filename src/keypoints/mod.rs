@@ -25,7 +25,10 @@ pub use face_detector::{FACE_DETECTOR_INPUT, FACE_DETECTOR_MODEL_PATH, FaceDetec
 pub use hand::{HAND_INPUT, HAND_MODEL_PATH, HAND_POINTS, HandLandmarker, HandLandmarks, Side};
 pub use iris::{IRIS_INPUT, IRIS_MODEL_PATH, Iris, IrisLandmarker};
 pub use palm::{PALM_INPUT, PALM_MODEL_PATH, PalmDetection, PalmDetector};
-pub use pose::{COCO_FROM_MEDIAPIPE, POSE_INPUT, POSE_MODEL_PATH, PoseKeypoints, PoseLandmarker};
+pub use pose::{
+    COCO_FROM_MEDIAPIPE, POSE_INPUT, POSE_MODEL_PATH, PoseKeypoints, PoseLandmarker,
+    coco_limb_keypoints,
+};
 pub use roi::Roi;
 pub use ssd::Detection;
 

@@ -48,6 +48,12 @@ pub const COCO_FROM_MEDIAPIPE: [(&str, usize); 17] = [
     ("right_ankle", 28),
 ];
 
+/// The COCO keypoints on the limbs, shoulders to ankles (all of [`COCO_FROM_MEDIAPIPE`] but its
+/// first five, which are on the head); on SMPL-X they are joints of the same names.
+pub fn coco_limb_keypoints() -> impl Iterator<Item = &'static str> {
+    COCO_FROM_MEDIAPIPE[5..].iter().map(|&(name, _)| name)
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct PoseKeypoints {
     /// The model's pose presence score in [0, 1].

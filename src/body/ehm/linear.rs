@@ -21,6 +21,7 @@ use crate::body::{
     BodyModel, BodyPose, Joint, Landmark, MAX_INFLUENCES, MorphTarget, Posable, PoseError,
     PosedBody, SMPLX_JOINTS, TargetGroup, smplx_to_default,
 };
+use crate::keypoints::coco_limb_keypoints;
 
 /// The leading PCA components the linear body carries for fitting, of SMPL-X shape, FLAME shape
 /// and FLAME expression: what 2D keypoints can tell apart (later components stay zero).
@@ -28,21 +29,6 @@ pub const LINEAR_COMPONENTS: usize = 10;
 /// PCA coefficients are in standard deviations; the fit keeps them within ±3.
 const PCA_RANGE: [f32; 2] = [-3.0, 3.0];
 const SMPLX_HEAD: usize = 15;
-/// The COCO keypoints that are SMPL-X joints (the pose model's names are SMPL-X's).
-const JOINT_KEYPOINTS: [&str; 12] = [
-    "left_shoulder",
-    "right_shoulder",
-    "left_elbow",
-    "right_elbow",
-    "left_wrist",
-    "right_wrist",
-    "left_hip",
-    "right_hip",
-    "left_knee",
-    "right_knee",
-    "left_ankle",
-    "right_ankle",
-];
 /// Ears are the head's outermost points within this height of the eyes (metres).
 const EAR_BAND: f32 = 0.03;
 const REST_FITS: &str = "a pose made by BodyPose::rest of the model has its lengths";
@@ -230,9 +216,8 @@ impl EhmModel {
             vertices: row.iter().map(|&(v, _)| v).collect(),
             weights: row.iter().map(|&(_, w)| w).collect(),
         };
-        let mut out: Vec<Landmark> = JOINT_KEYPOINTS
-            .iter()
-            .filter_map(|&name| {
+        let mut out: Vec<Landmark> = coco_limb_keypoints()
+            .filter_map(|name| {
                 let j = SMPLX_JOINTS.iter().position(|n| *n == name)?;
                 Some(regressed(name, self.body.regressor[j].clone()))
             })
