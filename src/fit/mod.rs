@@ -29,7 +29,7 @@ pub use face::{FACE_FEATURES, FACE_FIT_POINTS, FaceEmbedding, embed_face};
 pub use gaze::{eye_joint, pupil};
 pub use hand::{BodyPoint, hand_targets};
 
-use glam::{Mat4, Vec2, Vec3, Vec4};
+use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 
 use crate::body::{BodyModel, BodyPose, EhmModel, HEAD_SIZE, Landmark, PointPoser, TargetGroup};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
@@ -290,6 +290,8 @@ struct Stage<'a> {
     /// Pairs of morph targets that pay `weight · a · b` for acting together.
     antagonists: Vec<(usize, usize, f64)>,
     base: State,
+    /// Where the priors pull joints: rest, or a relaxed hang for a T-posed rig's arms.
+    relaxed: BodyPose,
     points: Vec<Vec3>,
     joints: Vec<Vec3>,
 }
@@ -331,7 +333,13 @@ impl Stage<'_> {
                 out.push(if ok { w * (a - b) as f64 } else { 1e4 });
             }
         }
-        out.extend(self.unknowns.iter().zip(p).map(|(&(_, w), &v)| w * v));
+        out.extend(self.unknowns.iter().zip(p).map(|(&(u, w), &v)| {
+            let centre = match u {
+                Unknown::Joint(j, k) => self.relaxed.rotations[j][k] as f64,
+                _ => 0.0,
+            };
+            w * (v - centre)
+        }));
         let c = &s.pose.coefficients;
         out.extend(
             self.antagonists
@@ -512,6 +520,36 @@ pub fn fit_ehm_detections(
     ))
 }
 
+/// Where a relaxed upper arm points, shoulder to elbow, on the body's left (+x; the right
+/// mirrors it): the default body's rest, 48° below horizontal.
+const RELAXED_UPPER_ARM: Vec3 = Vec3::new(0.665, -0.747, 0.016);
+/// An upper arm resting further than this from [`RELAXED_UPPER_ARM`] (SMPL-X's T-pose, 48° away)
+/// is relaxed for the fit; the default body's is not (it is the relaxed direction).
+const RELAXED_ARM_TOLERANCE_RAD: f32 = 0.17;
+
+/// The pose the fit starts from and its priors pull to: rest, with the upper arms of a rig that
+/// rests them elsewhere (SMPL-X's T-pose) turned to hang as [`RELAXED_UPPER_ARM`]; so arms the
+/// photo does not show hang as a person's would instead of sticking out sideways.
+fn relaxed_pose(body: &BodyModel) -> BodyPose {
+    let mut pose = BodyPose::rest(body);
+    for (side, mirror) in [("L", 1.0), ("R", -1.0)] {
+        let joint = |name: &str| body.joint_index(&format!("{name}.{side}"));
+        let (Some(shoulder), Some(elbow)) = (joint("upperarm01"), joint("lowerarm01")) else {
+            continue;
+        };
+        let Some(rest) = (body.joints[elbow].rest - body.joints[shoulder].rest).try_normalize()
+        else {
+            continue;
+        };
+        let relaxed = (RELAXED_UPPER_ARM * Vec3::new(mirror, 1.0, 1.0)).normalize();
+        if rest.angle_between(relaxed) > RELAXED_ARM_TOLERANCE_RAD {
+            // Rest frames are world-aligned, so the turn is the arc from rest to relaxed.
+            pose.rotations[shoulder] = Quat::from_rotation_arc(rest, relaxed).to_scaled_axis();
+        }
+    }
+    pose
+}
+
 /// What the fit sees on a photo.
 pub struct FitInput<'a> {
     pub keypoints: &'a [Keypoint],
@@ -581,9 +619,10 @@ pub fn fit_keypoints(
     let focal = GUAVA_INVTANFOV * side as f32 / 2.0;
     let depth = focal * w3 / w2.max(1.0);
     let centre = side as f32 / 2.0;
+    let relaxed = relaxed_pose(body);
     let start_at = |depth: f32| State {
         feature_offsets: [Vec2::ZERO; FACE_FEATURES.len()],
-        pose: BodyPose::rest(body),
+        pose: relaxed.clone(),
         camera: Vec3::new(
             (m2.x - centre) * depth / focal - m3.x,
             (m2.y - centre) * depth / focal + m3.y,
@@ -650,6 +689,7 @@ pub fn fit_keypoints(
         features: vec![None; body_observed],
         pixels: Vec::new(),
         base: start_at(depth),
+        relaxed: relaxed.clone(),
         points: Vec::new(),
         joints: Vec::new(),
     };
