@@ -542,7 +542,10 @@ fn the_demo_portrait_fits_on_ehm_as_on_the_default_body() {
             assert!(drop > 0.5, "{rest}: the {side} arm does not hang ({drop})");
         }
         // Written as a tracking file of EHM and read back, the view is the same.
-        let tracking = view.to_tracking(&ehm, "fit");
+        let file = std::env::temp_dir().join(format!("guava-ehm-fit-{}.json", std::process::id()));
+        view.to_tracking(&ehm, "fit").save(&file).expect("save");
+        let tracking = guava::tracking::Tracking::load(&file).expect("load");
+        std::fs::remove_file(&file).ok();
         assert_eq!(tracking.body, guava::tracking::BodyKind::Smplx);
         let back =
             guava::reconstruct::SourceView::from_tracking(&tracking, &ehm, "fit").expect("reads");
