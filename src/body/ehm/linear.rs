@@ -29,7 +29,7 @@ pub const LINEAR_COMPONENTS: usize = 10;
 /// PCA coefficients are in standard deviations; the fit keeps them within ±3.
 const PCA_RANGE: [f32; 2] = [-3.0, 3.0];
 const SMPLX_HEAD: usize = 15;
-/// Ears are the head's outermost points within this height of the eyes (metres).
+/// Ears are the head's outermost points within this height of the eyes (metres), if it has any.
 const EAR_BAND: f32 = 0.03;
 const REST_FITS: &str = "a pose made by BodyPose::rest of the model has its lengths";
 /// An eyeball's vertices within this fraction of its radius from its front are its iris.
@@ -243,12 +243,14 @@ impl EhmModel {
         let level = |v: &usize| (at(*v).y - eye_height).abs() < EAR_BAND;
         let by =
             |key: fn(Vec3) -> f32| move |a: &usize, b: &usize| key(at(*a)).total_cmp(&key(at(*b)));
+        // Level with the eyes if the head has vertices there, else anywhere on it.
+        let ear = |outermost: fn(Vec3) -> f32| {
+            let pick = |v: &mut dyn Iterator<Item = usize>| v.max_by(by(outermost));
+            pick(&mut head().filter(level)).or_else(|| pick(&mut head()))
+        };
         out.extend(vertex("nose", head().max_by(by(|p| p.z))));
-        out.extend(vertex("left_ear", head().filter(level).max_by(by(|p| p.x))));
-        out.extend(vertex(
-            "right_ear",
-            head().filter(level).min_by(by(|p| p.x)),
-        ));
+        out.extend(vertex("left_ear", ear(|p| p.x)));
+        out.extend(vertex("right_ear", ear(|p| -p.x)));
         out
     }
 }
