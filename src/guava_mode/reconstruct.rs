@@ -235,8 +235,10 @@ pub fn reconstruct_guava_file(
     mut landmarkers: Option<&mut Landmarkers>,
     progress: &mut dyn FnMut(Stage) -> bool,
 ) -> Result<(Avatar, GuavaReport, SourceView), ReconstructError> {
-    let mut image = SourceImage::load_at(photo, models.dims.image as u32)?;
     let file = photo.display().to_string();
+    let (decoded, has_alpha) = SourceImage::decode(photo)?;
+    let mut image =
+        SourceImage::from_rgba_at(&decoded, has_alpha, &file, models.dims.image as u32)?;
     let fitting = matches!(tracked, Tracked::Fit);
     let started = Instant::now();
     let mut detections = None;
@@ -257,7 +259,7 @@ pub fn reconstruct_guava_file(
         }
         let found = if fitting {
             // The keypoint models see the photo at the source size, not the encoder's.
-            keypoint_models.detect(&SourceImage::load(photo)?)
+            keypoint_models.detect(&SourceImage::from_rgba(&decoded, has_alpha, &file)?)
         } else {
             keypoint_models.pose(&image).map(Detections::pose_only)
         };

@@ -47,13 +47,19 @@ impl SourceImage {
 
     /// [`Self::load`] at `size`².
     pub fn load_at(path: &Path, size: u32) -> Result<Self, ReconstructError> {
-        let file = path.display().to_string();
+        let (decoded, has_alpha) = Self::decode(path)?;
+        Self::from_rgba_at(&decoded, has_alpha, &path.display().to_string(), size)
+    }
+
+    /// The photo's pixels and whether it has an alpha channel, for making it at several sizes
+    /// ([`Self::from_rgba_at`]) from one decoding.
+    pub fn decode(path: &Path) -> Result<(RgbaImage, bool), ReconstructError> {
         let decoded = image::open(path).map_err(|e| ReconstructError::Image {
-            file: file.clone(),
+            file: path.display().to_string(),
             problem: e.to_string(),
         })?;
         let has_alpha = decoded.color().has_alpha();
-        Self::from_rgba_at(&decoded.to_rgba8(), has_alpha, &file, size)
+        Ok((decoded.to_rgba8(), has_alpha))
     }
 
     /// Crops the centred square, resizes it to [`SOURCE_SIZE`] and applies the alpha as mask when

@@ -1284,26 +1284,10 @@ fn reconstruct_worker(
     stage: &Mutex<&'static str>,
     cancel: &AtomicBool,
 ) -> Result<Loaded, String> {
-    use guava::reconstruct::{DEFAULT_UV_SIZE, Tracked, UvMap, reconstruct_photo_file};
-    *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the keypoint models";
+    use guava::reconstruct::{DEFAULT_UV_SIZE, UvMap, reconstruct_photo_file};
     // The pose and face models fit photos without tracking; the pose model masks photos without
-    // alpha.
-    let model = guava::onnx::OnnxRuntime::load()
-        .map_err(|e| e.to_string())
-        .and_then(|rt| guava::keypoints::Landmarkers::load(rt).map_err(|e| e.to_string()));
-    let mut model = match (&tracked, model) {
-        (_, Ok(m)) => Some(m),
-        (Tracked::Fit, Err(e)) => {
-            return Err(format!(
-                "{}: no tracking file beside it, and fitting needs the keypoint models: {e}",
-                photo.display()
-            ));
-        }
-        (_, Err(e)) => {
-            log::warn!("keypoint models unavailable ({e}); masking by the body's silhouette");
-            None
-        }
-    };
+    // alpha (else the body's silhouette does).
+    let mut model = keypoint_models(photo, &tracked, stage)?;
     *stage.lock().unwrap_or_else(|e| e.into_inner()) = "building the UV map";
     let uv = UvMap::for_body(body, DEFAULT_UV_SIZE);
     let (avatar, report, view) = reconstruct_photo_file(
@@ -1331,6 +1315,30 @@ fn reconstruct_worker(
         preview,
         Some(camera),
     ))
+}
+
+/// The keypoint models for reconstructing `photo`: fitting needs them (their error is the
+/// job's), otherwise they are optional (a warning, and `None`).
+fn keypoint_models(
+    photo: &Path,
+    tracked: &guava::reconstruct::Tracked,
+    stage: &Mutex<&'static str>,
+) -> Result<Option<guava::keypoints::Landmarkers>, String> {
+    *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the keypoint models";
+    let loaded = guava::onnx::OnnxRuntime::load()
+        .map_err(|e| e.to_string())
+        .and_then(|rt| guava::keypoints::Landmarkers::load(rt).map_err(|e| e.to_string()));
+    match loaded {
+        Ok(m) => Ok(Some(m)),
+        Err(e) if matches!(tracked, guava::reconstruct::Tracked::Fit) => Err(format!(
+            "{}: no tracking file beside it, and fitting needs the keypoint models: {e}",
+            photo.display()
+        )),
+        Err(e) => {
+            log::warn!("keypoint models unavailable ({e})");
+            Ok(None)
+        }
+    }
 }
 
 /// What a default reconstruction saw and how long it took, for the avatar's label.
@@ -1391,21 +1399,8 @@ fn guava_worker(
     let mut landmarkers = if has_alpha && !fitting {
         None
     } else {
-        *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the keypoint models";
-        let loaded = guava::onnx::OnnxRuntime::load()
-            .map_err(|e| e.to_string())
-            .and_then(|rt| guava::keypoints::Landmarkers::load(rt).map_err(|e| e.to_string()));
-        match loaded {
-            Ok(m) => Some(m),
-            Err(e) if fitting => {
-                return Err(format!(
-                    "{}: no tracking file beside it, and fitting needs the keypoint models: {e}",
-                    photo.display()
-                ));
-            }
-            // reconstruct_guava_file says what is missing if the photo needs its mask.
-            Err(_) => None,
-        }
+        // reconstruct_guava_file says what is missing if the photo needs its mask.
+        keypoint_models(photo, &tracked, stage)?
     };
     let mut models = networks.lock().unwrap_or_else(|e| e.into_inner());
     let uv = uv_map(body, models.dims.uv as u32);

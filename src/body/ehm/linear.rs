@@ -245,8 +245,8 @@ impl EhmModel {
             |key: fn(Vec3) -> f32| move |a: &usize, b: &usize| key(at(*a)).total_cmp(&key(at(*b)));
         // Level with the eyes if the head has vertices there, else anywhere on it.
         let ear = |outermost: fn(Vec3) -> f32| {
-            let pick = |v: &mut dyn Iterator<Item = usize>| v.max_by(by(outermost));
-            pick(&mut head().filter(level)).or_else(|| pick(&mut head()))
+            let level_with_eyes = head().filter(level).max_by(by(outermost));
+            level_with_eyes.or_else(|| head().max_by(by(outermost)))
         };
         out.extend(vertex("nose", head().max_by(by(|p| p.z))));
         out.extend(vertex("left_ear", ear(|p| p.x)));
