@@ -96,10 +96,8 @@ enum Command {
         /// The avatar file to write (.guava).
         #[arg(long)]
         out: PathBuf,
-        /// Keypoint models from this folder instead of the shipped ones (same file names and
-        /// inputs and outputs as assets/models/).
-        #[arg(long)]
-        keypoint_models: Option<PathBuf>,
+        #[command(flatten)]
+        keypoints: KeypointArgs,
         /// GUAVA mode: the folder of GUAVA's networks as exported by
         /// tools/export_guava_onnx.py (needs --ehm; without a tracking file of that body, EHM is
         /// fitted to the keypoints).
@@ -121,10 +119,8 @@ enum Command {
         /// fitted body puts them (red), twice the size, as PNG.
         #[arg(long)]
         overlay: Option<PathBuf>,
-        /// Keypoint models from this folder instead of the shipped ones (same file names and
-        /// inputs and outputs as assets/models/).
-        #[arg(long)]
-        keypoint_models: Option<PathBuf>,
+        #[command(flatten)]
+        keypoints: KeypointArgs,
         /// Fit this EHM body (tools/convert_ehm.py; GUAVA mode's) instead of the default body.
         #[arg(long)]
         ehm: Option<PathBuf>,
@@ -134,6 +130,19 @@ enum Command {
         #[command(subcommand)]
         which: Bench,
     },
+}
+
+/// Where the keypoint models come from.
+#[derive(clap::Args)]
+struct KeypointArgs {
+    /// Keypoint models from this folder instead of the shipped ones (same file names and
+    /// inputs and outputs as assets/models/).
+    #[arg(long)]
+    keypoint_models: Option<PathBuf>,
+    /// EHM-Tracker's checkpoint folder (yolox_l.onnx, dw-ll_ucoco_384.onnx): its DWPose places
+    /// the body and hand points; the face, irises and person mask stay MediaPipe's.
+    #[arg(long)]
+    dwpose: Option<PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -242,7 +251,7 @@ fn run(cli: Cli) -> Result<()> {
             tracking,
             fit: force_fit,
             out,
-            keypoint_models,
+            keypoints,
             guava_models,
             ehm,
         } => {
@@ -254,27 +263,20 @@ fn run(cli: Cli) -> Result<()> {
                 None if beside.is_file() => Tracked::File(&beside),
                 None => Tracked::Fit,
             };
-            let keypoint_models = keypoint_models.as_deref();
             match (guava_models, ehm) {
                 (Some(models), Some(ehm)) => {
-                    reconstruct_guava(&image, tracked, &models, &ehm, &out, keypoint_models)
+                    reconstruct_guava(&image, tracked, &models, &ehm, &out, &keypoints)
                 }
-                _ => reconstruct(&image, tracked, &out, keypoint_models),
+                _ => reconstruct(&image, tracked, &out, &keypoints),
             }
         }
         Command::Fit {
             image,
             out,
             overlay,
-            keypoint_models,
+            keypoints,
             ehm,
-        } => fit(
-            &image,
-            &out,
-            overlay.as_deref(),
-            keypoint_models.as_deref(),
-            ehm.as_deref(),
-        ),
+        } => fit(&image, &out, overlay.as_deref(), &keypoints, ehm.as_deref()),
         Command::Motion { file, out, ehm } => motion(&file, out.as_deref(), ehm.as_deref()),
         Command::Bench { which } => match which {
             Bench::Splat(args) => guava::bench::splat(&args),
@@ -340,14 +342,17 @@ fn synth_photo(out: &Path, yaw: f32) -> Result<()> {
     Ok(())
 }
 
-/// The keypoint models (shipped, or from `dir`) on the installed ONNX Runtime.
-fn landmarkers(dir: Option<&Path>) -> Result<guava::keypoints::Landmarkers> {
+/// The keypoint models (shipped, or from `--keypoint-models`, with EHM-Tracker's from
+/// `--dwpose`) on the installed ONNX Runtime.
+fn landmarkers(args: &KeypointArgs) -> Result<guava::keypoints::Landmarkers> {
     use guava::keypoints::{Landmarkers, MODELS_DIR};
     let runtime = guava::onnx::OnnxRuntime::load()?;
-    Ok(Landmarkers::load_dir(
-        runtime,
-        dir.unwrap_or(Path::new(MODELS_DIR)),
-    )?)
+    let dir = args.keypoint_models.as_deref();
+    let models = Landmarkers::load_dir(runtime, dir.unwrap_or(Path::new(MODELS_DIR)))?;
+    Ok(match &args.dwpose {
+        Some(dir) => models.with_wholebody(runtime, dir)?,
+        None => models,
+    })
 }
 
 /// One line on the fit, and one on its face stage.
@@ -397,7 +402,7 @@ fn print_fit(f: &guava::fit::FitReport) {
 /// without alpha; `without` says what happens without them).
 fn keypoint_models_for(
     tracked: &guava::reconstruct::Tracked,
-    models: Option<&Path>,
+    models: &KeypointArgs,
     without: &str,
 ) -> Result<Option<guava::keypoints::Landmarkers>> {
     match landmarkers(models) {
@@ -416,7 +421,7 @@ fn reconstruct(
     image: &Path,
     tracked: guava::reconstruct::Tracked,
     out: &Path,
-    models: Option<&Path>,
+    models: &KeypointArgs,
 ) -> Result<()> {
     use guava::reconstruct::{DEFAULT_UV_SIZE, MaskSource, UvMap, reconstruct_photo_file};
     let body = guava::body::BodyModel::default_body()?;
@@ -478,7 +483,7 @@ fn reconstruct_guava(
     models: &Path,
     ehm: &Path,
     out: &Path,
-    keypoint_models: Option<&Path>,
+    keypoint_models: &KeypointArgs,
 ) -> Result<()> {
     use guava::guava_mode::{GuavaModels, reconstruct_guava_file, uv_map};
     let t0 = std::time::Instant::now();
@@ -525,7 +530,7 @@ fn fit(
     image: &Path,
     out: &Path,
     overlay: Option<&Path>,
-    models: Option<&Path>,
+    models: &KeypointArgs,
     ehm: Option<&Path>,
 ) -> Result<()> {
     use guava::fit::{fit_detections, fit_ehm_detections};
@@ -536,13 +541,14 @@ fn fit(
     let found = models.detect(&source)?;
     let t1 = std::time::Instant::now();
     let name = image.file_name().unwrap_or_default().to_string_lossy();
+    let body_points = models.body_points();
     let fitted = |report: &guava::fit::FitReport, body: &str| {
         let face = if report.face.is_some() {
             " and face_landmark face mesh"
         } else {
             ""
         };
-        format!("fitted by guava fit to {name}: pose_landmark_full keypoints{face}, {body}")
+        format!("fitted by guava fit to {name}: {body_points}{face}, {body}")
     };
     let failed = |e: guava::fit::FitError| anyhow::anyhow!("{}: {e}", image.display());
     let (tracking, report) = match ehm {

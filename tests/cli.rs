@@ -186,6 +186,39 @@ fn fit_writes_tracking_and_takes_a_model_folder() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `guava fit --dwpose`: EHM-Tracker's checkpoint folder (here the stand-in models of
+/// tests/data/dwpose) places the body and hand points; the tracking file says so. A folder
+/// without its two files is one error naming them, and nothing is written.
+#[test]
+fn fit_takes_ehm_trackers_keypoint_models() {
+    let dir = std::env::temp_dir().join(format!("guava-cli-dwpose-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let portrait = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/demo_portrait.png");
+    let stand_in = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/dwpose");
+    let out = dir.join("fit.json");
+    let out_s = out.to_str().expect("utf-8");
+    let fit = |models: &str| {
+        guava(&[
+            "fit", "--image", portrait, "--out", out_s, "--dwpose", models,
+        ])
+    };
+    let (ok, _, stderr) = fit(dir.to_str().expect("utf-8"));
+    assert!(!ok && !out.exists());
+    assert!(
+        stderr.contains("lacks yolox_l.onnx, dw-ll_ucoco_384.onnx"),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = fit(stand_in);
+    assert!(ok, "{stderr}");
+    let fitted = guava::tracking::Tracking::load(&out).expect("a valid tracking file");
+    assert!(
+        fitted.source.contains("EHM-Tracker's DWPose"),
+        "{}",
+        fitted.source
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn reconstruct_in_guava_mode_with_exported_networks() {
     use guava::body::EhmModel;

@@ -21,3 +21,4 @@ mod splat_stability;
 mod splat_vs_reference;
 mod tracking;
 mod tracking_convert;
+mod wholebody;

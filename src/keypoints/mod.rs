@@ -4,7 +4,8 @@
 //! gives the body points and a person mask; the face and hand models see crops placed by the pose
 //! model's face and hand points, then second crops placed by their own first answers; the palm
 //! and face detectors place crops for hands and faces the pose model missed; the iris model sees
-//! each eye of the face mesh.
+//! each eye of the face mesh. EHM-Tracker's own models (YOLOX and DWPose, [`Wholebody`]) can
+//! stand in for the body and hand points.
 
 mod detector;
 mod face;
@@ -15,7 +16,10 @@ mod model;
 mod palm;
 mod pose;
 mod roi;
+mod simcc;
 mod ssd;
+mod wholebody;
+mod yolox;
 
 pub use detector::{DETECTOR_INPUT, DETECTOR_MODEL_PATH, PersonDetection, PoseDetector};
 pub use face::{
@@ -30,7 +34,10 @@ pub use pose::{
     coco_limb_keypoints,
 };
 pub use roi::Roi;
+pub use simcc::{SimccCrop, SimccLandmarker, SimccPoints};
 pub use ssd::Detection;
+pub use wholebody::{WHOLEBODY_FILES, Wholebody, WholebodyPoints};
+pub use yolox::{PersonBox, PersonDetector};
 
 use std::path::Path;
 
@@ -95,6 +102,9 @@ pub struct Landmarkers {
     pub iris: IrisLandmarker,
     pub palm: PalmDetector,
     pub face_detector: FaceDetector,
+    /// EHM-Tracker's models, when given: they place the body and hand points instead of
+    /// MediaPipe's pose and hand models ([`Self::detect`]).
+    pub wholebody: Option<Wholebody>,
 }
 
 impl Landmarkers {
@@ -128,7 +138,22 @@ impl Landmarkers {
             iris: IrisLandmarker::load_from(runtime, &iris)?,
             palm: PalmDetector::load_from(runtime, &palm)?,
             face_detector: FaceDetector::load_from(runtime, &face_detector)?,
+            wholebody: None,
         })
+    }
+
+    /// These models with EHM-Tracker's from its checkpoint folder ([`Wholebody::load_dir`]).
+    pub fn with_wholebody(mut self, runtime: &OnnxRuntime, dir: &Path) -> Result<Self, OnnxError> {
+        self.wholebody = Some(Wholebody::load_dir(runtime, dir)?);
+        Ok(self)
+    }
+
+    /// Which model places the body and hand points, for reports.
+    pub fn body_points(&self) -> &'static str {
+        match self.wholebody {
+            Some(_) => "EHM-Tracker's DWPose body and hand keypoints",
+            None => "pose_landmark_full keypoints",
+        }
     }
 
     /// Body points and the person mask: the pose model in the crop the pose detector places
@@ -153,15 +178,23 @@ impl Landmarkers {
 
     /// The pose pipeline on the photo, then the face and hand models where it puts them (and
     /// the hand model where the palm detector finds hands it did not), and the iris model in the
-    /// face's eyes.
+    /// face's eyes. With EHM-Tracker's models loaded, the body's COCO points and the hands are
+    /// theirs; the pose model still gives the person's presence and mask, and the face crop
+    /// is placed by the body points in use.
     pub fn detect(&mut self, source: &SourceImage) -> Result<Detections, OnnxError> {
-        let pose = self.pose(source)?;
-        let face = self.face(source, &pose)?;
+        let mut pose = self.pose(source)?;
         let mut hands = Vec::new();
-        for side in [Side::Left, Side::Right] {
-            hands.extend(self.hand.detect(source, &pose, side)?);
+        if let Some(wholebody) = &mut self.wholebody {
+            let found = wholebody.detect(source)?;
+            pose.keypoints = found.body();
+            hands = found.hands();
+        } else {
+            for side in [Side::Left, Side::Right] {
+                hands.extend(self.hand.detect(source, &pose, side)?);
+            }
+            self.hands_from_palms(source, &pose, &mut hands)?;
         }
-        self.hands_from_palms(source, &pose, &mut hands)?;
+        let face = self.face(source, &pose)?;
         let irises = match &face {
             Some(face) => self.iris.detect(source, face)?,
             None => Vec::new(),

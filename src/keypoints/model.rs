@@ -1,9 +1,11 @@
-//! What the landmark models share: one square RGB input (NHWC, values in [0, 1], as MediaPipe's
-//! graphs feed them) and a known number of outputs, checked when the model loads.
+//! What the keypoint models share: MediaPipe's take one square RGB input (NHWC, values in [0, 1],
+//! as MediaPipe's graphs feed them), EHM-Tracker's one NCHW input of a fixed size; each has a
+//! known number of outputs, checked when the model loads.
 
 use std::path::Path;
 
 use crate::onnx::{OnnxError, OnnxRuntime, Session, TensorF32};
+use crate::reconstruct::SourceImage;
 
 pub(super) struct SquareModel {
     session: Session,
@@ -61,4 +63,74 @@ impl SquareModel {
                 reason: format!("the model gave no {what} output ({len} values)"),
             })
     }
+}
+
+/// A model with one NCHW RGB input of a fixed size (EHM-Tracker's YOLOX and DWPose) and a known
+/// number of outputs, checked when it loads.
+pub(super) struct NchwModel {
+    session: Session,
+    pub width: usize,
+    pub height: usize,
+}
+
+impl NchwModel {
+    /// `what` names the model in errors ("EHM-Tracker's person detector (YOLOX)").
+    pub fn load(
+        runtime: &OnnxRuntime,
+        path: &Path,
+        what: &str,
+        outputs: usize,
+    ) -> Result<Self, OnnxError> {
+        let session = runtime.session(path)?;
+        let inputs = session.input_shapes();
+        let fail = |reason: String| OnnxError::Model {
+            path: path.to_path_buf(),
+            reason: format!("expected {what}: {reason}"),
+        };
+        if inputs.len() != 1 || session.output_names().len() != outputs {
+            return Err(fail(format!(
+                "1 input and {outputs} outputs, found inputs {:?} and outputs {:?}",
+                session.input_names(),
+                session.output_names()
+            )));
+        }
+        let (width, height) = match inputs[0].1[..] {
+            [1, 3, h, w] if h > 0 && w > 0 => (w as usize, h as usize),
+            ref shape => {
+                return Err(fail(format!(
+                    "an input of shape [1, 3, height, width] with fixed sizes, found {shape:?}"
+                )));
+            }
+        };
+        Ok(Self {
+            session,
+            width,
+            height,
+        })
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.session.path
+    }
+
+    /// The outputs, in the model's order, for an input of 3 planes of `height` × `width`.
+    pub fn run(&mut self, planes: Vec<f32>) -> Result<Vec<TensorF32>, OnnxError> {
+        assert_eq!(planes.len(), 3 * self.width * self.height, "NCHW input");
+        let name = self.session.input_names()[0].clone();
+        let tensor = TensorF32 {
+            shape: vec![1, 3, self.height, self.width],
+            data: planes,
+        };
+        self.session.run(vec![(&name, tensor)])
+    }
+}
+
+/// The source's RGB as 8-bit values, as OpenCV holds a photo (the source was made from 8-bit
+/// pixels, so this gives them back).
+pub(super) fn rgb8(source: &SourceImage) -> Vec<u8> {
+    source
+        .rgb
+        .iter()
+        .map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
+        .collect()
 }

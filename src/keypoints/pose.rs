@@ -65,6 +65,8 @@ pub struct PoseKeypoints {
     pub refined: Vec<Vec2>,
     /// The crop the model saw.
     pub roi: Roi,
+    /// The COCO body points the fit uses: MediaPipe's ([`COCO_FROM_MEDIAPIPE`]), or DWPose's
+    /// when EHM-Tracker's models are loaded ([`super::Landmarkers::detect`]).
     pub keypoints: Vec<Keypoint>,
     /// Person probability per pixel of the 256² input, row-major.
     pub mask: Vec<f32>,

@@ -1,0 +1,185 @@
+//! EHM-Tracker's own keypoint models as it chains them (`wholebody.py`, `DWposeDetector`): YOLOX
+//! finds the people, DWPose gives each the 133 COCO-WholeBody points (17 body, 6 feet, 68 face,
+//! 21 per hand), and the person whose points span the largest box is kept; with nobody found
+//! DWPose sees the whole photo. Loaded from EHM-Tracker's checkpoint folder under its file names
+//! ([`WHOLEBODY_FILES`]); the weights are not redistributed here.
+//!
+//! The fit takes the body and hand points from here and the face, irises and person mask from
+//! MediaPipe, as EHM-Tracker weighs the face from MediaPipe's mesh and DWPose's face points
+//! barely. EHM-Tracker reorders the body points into OpenPose's 18 (a neck between the
+//! shoulders) for its own fit; here they keep COCO's order, which is the fit's.
+
+use std::path::Path;
+
+use glam::Vec2;
+
+use super::hand::{HAND_POINTS, HandLandmarks, Side};
+use super::simcc::{SimccLandmarker, SimccPoints};
+use super::yolox::{PersonBox, PersonDetector};
+use super::{COCO_FROM_MEDIAPIPE, Keypoint, Roi};
+use crate::onnx::{OnnxError, OnnxRuntime};
+use crate::reconstruct::SourceImage;
+
+/// EHM-Tracker's file names for the person detector and the keypoint model.
+pub const WHOLEBODY_FILES: [&str; 2] = ["yolox_l.onnx", "dw-ll_ucoco_384.onnx"];
+/// COCO-WholeBody's points: where each hand's 21 start (the subject's left, then right; in
+/// MediaPipe's order: wrist, then thumb, index, middle, ring and little finger, base to tip).
+const POINTS: usize = 133;
+const LEFT_HAND: usize = 91;
+const RIGHT_HAND: usize = 112;
+/// DWPose and EHM-Tracker take a point as seen from this score.
+const SEEN_SCORE: f32 = 0.3;
+
+pub struct Wholebody {
+    person: PersonDetector,
+    pose: SimccLandmarker,
+}
+
+impl Wholebody {
+    /// The two models from EHM-Tracker's checkpoint folder; missing files are named in one error.
+    pub fn load_dir(runtime: &OnnxRuntime, dir: &Path) -> Result<Self, OnnxError> {
+        let missing: Vec<&str> = WHOLEBODY_FILES
+            .iter()
+            .copied()
+            .filter(|f| !dir.join(f).is_file())
+            .collect();
+        if !missing.is_empty() {
+            return Err(OnnxError::Model {
+                path: dir.to_path_buf(),
+                reason: format!(
+                    "EHM-Tracker's keypoint model folder lacks {}",
+                    missing.join(", ")
+                ),
+            });
+        }
+        let [person, pose] = WHOLEBODY_FILES.map(|f| dir.join(f));
+        Ok(Self {
+            person: PersonDetector::load_from(runtime, &person)?,
+            pose: SimccLandmarker::load_from(runtime, &pose)?,
+        })
+    }
+
+    /// The people YOLOX finds and the points of the one whose points span the largest box (of
+    /// the whole photo when it finds nobody).
+    pub fn detect(&mut self, source: &SourceImage) -> Result<WholebodyPoints, OnnxError> {
+        let people = self.person.detect(source)?;
+        let mut best: Option<(f32, SimccPoints)> = None;
+        for person in people.iter().map(|p| Some(p.corners)) {
+            let found = self.pose.detect(source, person)?;
+            let area = spanned_area(&found.points);
+            if best.as_ref().is_none_or(|(a, _)| area > *a) {
+                best = Some((area, found));
+            }
+        }
+        let found = match best {
+            Some((_, found)) => found,
+            None => self.pose.detect(source, None)?,
+        };
+        if found.points.len() != POINTS {
+            return Err(OnnxError::Run {
+                path: self.pose.path().to_path_buf(),
+                reason: format!(
+                    "expected COCO-WholeBody's {POINTS} keypoints, found {}",
+                    found.points.len()
+                ),
+            });
+        }
+        Ok(WholebodyPoints { people, found })
+    }
+}
+
+/// `DWposeDetector.get_max_area_bbox_index`: the area of the box around all of a person's points.
+fn spanned_area(points: &[Vec2]) -> f32 {
+    let (lo, hi) = points.iter().fold(
+        (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    );
+    let size = hi - lo;
+    size.x * size.y
+}
+
+/// DWPose's scores are the heights of its SimCC peaks, not probabilities (they pass 1), and it
+/// takes a point as seen from 0.3; the fit's keypoint threshold is MediaPipe's 0.5. Scores map
+/// linearly on either side of that threshold (0 → 0, 0.3 → 0.5, 1 and more → 1), so the fit uses
+/// the points DWPose counts as seen.
+pub fn confidence(score: f32) -> f32 {
+    let c = if score < SEEN_SCORE {
+        0.5 * score / SEEN_SCORE
+    } else {
+        0.5 + 0.5 * (score - SEEN_SCORE) / (1.0 - SEEN_SCORE)
+    };
+    if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) }
+}
+
+/// What EHM-Tracker's models found on a photo.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WholebodyPoints {
+    /// The people YOLOX found, best first (none: DWPose saw the whole photo).
+    pub people: Vec<PersonBox>,
+    /// DWPose's answer for the person kept, in EHM-Tracker's pixel coordinates.
+    pub found: SimccPoints,
+}
+
+impl WholebodyPoints {
+    /// Point `i` in the source's pixel-edge coordinates (EHM-Tracker puts pixel centres at
+    /// integers), with its confidence.
+    pub fn point(&self, i: usize) -> (Vec2, f32) {
+        (
+            self.found.points[i] + Vec2::splat(0.5),
+            confidence(self.found.scores[i]),
+        )
+    }
+
+    /// The 17 COCO body points under the fit's names.
+    pub fn body(&self) -> Vec<Keypoint> {
+        COCO_FROM_MEDIAPIPE
+            .iter()
+            .enumerate()
+            .map(|(i, &(name, _))| {
+                let (pixel, confidence) = self.point(i);
+                Keypoint {
+                    name,
+                    pixel,
+                    confidence,
+                }
+            })
+            .collect()
+    }
+
+    /// Each hand whose 21 points' mean confidence reaches the seen threshold (0.5, a mean score
+    /// of about DWPose's 0.3), its presence that mean.
+    pub fn hands(&self) -> Vec<HandLandmarks> {
+        [(Side::Left, LEFT_HAND), (Side::Right, RIGHT_HAND)]
+            .into_iter()
+            .filter_map(|(side, first)| {
+                let (points, confidences): (Vec<Vec2>, Vec<f32>) = (first
+                    ..first + HAND_POINTS.len())
+                    .map(|i| self.point(i))
+                    .unzip();
+                let presence = confidences.iter().sum::<f32>() / confidences.len() as f32;
+                (presence >= confidence(SEEN_SCORE)).then(|| HandLandmarks {
+                    side,
+                    roi: Roi::hand_from_landmarks(&points),
+                    points,
+                    presence,
+                })
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dwpose_seen_scores_map_onto_the_fit_threshold() {
+        assert_eq!(confidence(0.0), 0.0);
+        assert_eq!(confidence(SEEN_SCORE), 0.5);
+        assert_eq!(confidence(1.0), 1.0);
+        assert_eq!(confidence(1.4), 1.0);
+        assert_eq!(confidence(-0.2), 0.0);
+        assert_eq!(confidence(f32::NAN), 0.0);
+        assert!(confidence(0.29) < 0.5 && confidence(0.31) > 0.5);
+    }
+}

@@ -1,0 +1,246 @@
+//! EHM-Tracker's keypoint models (YOLOX + DWPose) through our adapter against EHM-Tracker's own
+//! Python pre- and post-processing (`onnxdet.py`, `onnxpose.py`), on stand-in models with the
+//! real ones' inputs and outputs (tools/make_dwpose_fixture.py; the real weights are not in any
+//! package registry).
+
+use glam::{DVec2, Vec2};
+use guava::keypoints::{
+    COCO_FROM_MEDIAPIPE, Landmarkers, PersonDetector, SimccLandmarker, WHOLEBODY_FILES, Wholebody,
+};
+use guava::onnx::OnnxRuntime;
+use guava::reconstruct::SourceImage;
+use std::path::{Path, PathBuf};
+
+fn runtime() -> &'static OnnxRuntime {
+    OnnxRuntime::load().expect("ONNX Runtime (bash tools/setup.sh installs it)")
+}
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(name)
+}
+
+fn models() -> PathBuf {
+    data("tests/data/dwpose")
+}
+
+fn fixture() -> serde_json::Value {
+    let bytes = std::fs::read(models().join("fixture.json")).expect("fixture");
+    serde_json::from_slice(&bytes).expect("json")
+}
+
+fn portrait() -> SourceImage {
+    SourceImage::load(&data("assets/demo_portrait.png")).expect("demo portrait")
+}
+
+fn floats(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array()
+        .expect("array")
+        .iter()
+        .map(|x| x.as_f64().expect("number"))
+        .collect()
+}
+
+fn points(v: &serde_json::Value) -> Vec<Vec2> {
+    v.as_array()
+        .expect("points")
+        .iter()
+        .map(|p| {
+            let p = floats(p);
+            Vec2::new(p[0] as f32, p[1] as f32)
+        })
+        .collect()
+}
+
+/// The 96×96 block averages of an NCHW input, channel-major (the stand-in model sees only these).
+fn blocks(input: &[f32], w: usize, h: usize) -> Vec<f64> {
+    let mut out = Vec::new();
+    for c in 0..3 {
+        for by in 0..h / 96 {
+            for bx in 0..w / 96 {
+                let mut sum = 0.0;
+                for y in by * 96..(by + 1) * 96 {
+                    for x in bx * 96..(bx + 1) * 96 {
+                        sum += input[(c * h + y) * w + x] as f64;
+                    }
+                }
+                out.push(sum / (96.0 * 96.0));
+            }
+        }
+    }
+    out
+}
+
+fn max_abs(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn person_boxes_match_ehm_trackers_python() {
+    let mut detector =
+        PersonDetector::load_from(runtime(), &models().join(WHOLEBODY_FILES[0])).expect("yolox");
+    let found = detector.detect(&portrait()).expect("runs");
+    let expected = fixture()["boxes"].as_array().expect("boxes").clone();
+    assert_eq!(found.len(), expected.len(), "{found:?}");
+    let off = found
+        .iter()
+        .zip(&expected)
+        .map(|(b, e)| {
+            let e = floats(e);
+            (0..4)
+                .map(|k| (b.corners[k] as f64 - e[k]).abs())
+                .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max);
+    println!(
+        "person boxes: {} as in Python, corners within {off:.2e} px",
+        found.len()
+    );
+    // The letterboxed input is OpenCV's to the bit; what is left is float rounding.
+    assert!(off < 1e-3, "{off}");
+}
+
+#[test]
+fn dwpose_crops_and_points_match_ehm_trackers_python() {
+    let mut pose =
+        SimccLandmarker::load_from(runtime(), &models().join(WHOLEBODY_FILES[1])).expect("dwpose");
+    let (source, fixture) = (portrait(), fixture());
+    // The box of the person EHM-Tracker kept: the one its crop is centred on.
+    let kept = floats(&fixture["largest_person"]["centre"]);
+    let person = fixture["boxes"]
+        .as_array()
+        .expect("boxes")
+        .iter()
+        .map(|b| {
+            let b = floats(b);
+            [b[0] as f32, b[1] as f32, b[2] as f32, b[3] as f32]
+        })
+        .find(|b| {
+            let centre = DVec2::new(b[0] as f64 + b[2] as f64, b[1] as f64 + b[3] as f64) / 2.0;
+            (centre - DVec2::new(kept[0], kept[1])).length() < 1e-3
+        })
+        .expect("the kept person's box is one of the boxes");
+    for (case, corners) in [("largest_person", Some(person)), ("whole_photo", None)] {
+        let expected = &fixture[case];
+        let crop = pose.crop(&source, corners);
+        let (centre, scale) = (floats(&expected["centre"]), floats(&expected["scale"]));
+        let crop_off = max_abs(
+            &[crop.centre.x, crop.centre.y, crop.scale.x, crop.scale.y],
+            &[centre[0], centre[1], scale[0], scale[1]],
+        );
+        let input = blocks(&pose.input(&source, crop), 288, 384);
+        let input_off = max_abs(&input, &floats(&expected["input_blocks"]));
+        let found = pose.detect(&source, corners).expect("runs");
+        let want = points(&expected["points"]);
+        let scores = floats(&expected["scores"]);
+        let bin = crop.scale.x as f32 / 288.0 / 2.0;
+        let moved: Vec<f32> = found
+            .points
+            .iter()
+            .zip(&want)
+            .map(|(a, b)| (*a - *b).abs().max_element() / bin)
+            .collect();
+        let same = moved.iter().filter(|&&m| m < 1e-3).count();
+        let worst = moved.iter().copied().fold(0.0, f32::max);
+        let found_scores: Vec<f64> = found.scores.iter().map(|&s| s as f64).collect();
+        let score_off = max_abs(&found_scores, &scores);
+        println!(
+            "{case}: crop {crop_off:.1e} px, input blocks {input_off:.1e}, points in the same bin \
+             {same}/{}, worst {worst:.2} bins, scores {score_off:.1e}",
+            want.len()
+        );
+        assert!(crop_off < 1e-6, "{case}: crop {crop_off}");
+        // The warped input is OpenCV's to the bit (one 8-bit level would move a block average
+        // by up to 1.7e-2); what is left is the order of float sums.
+        assert!(input_off < 1e-5, "{case}: input {input_off}");
+        // So every point lands in the same bin (half an input pixel) as EHM-Tracker's.
+        assert_eq!(same, want.len(), "{case}: worst {worst} bins");
+        assert!(score_off < 1e-4, "{case}: scores {score_off}");
+    }
+}
+
+#[test]
+fn wholebody_keeps_the_largest_person_and_gives_the_fit_its_points() {
+    let mut wholebody = Wholebody::load_dir(runtime(), &models()).expect("stand-in models");
+    let source = portrait();
+    let found = wholebody.detect(&source).expect("runs");
+    let fixture = fixture();
+    let expected = &fixture["largest_person"];
+    let centre = floats(&expected["centre"]);
+    assert!(
+        (found.found.crop.centre - DVec2::new(centre[0], centre[1])).length() < 1e-3,
+        "kept the person DWposeDetector keeps"
+    );
+    assert_eq!(
+        found.people.len(),
+        fixture["boxes"].as_array().expect("boxes").len()
+    );
+
+    // The body points under the fit's names, in our pixel-edge coordinates.
+    let body = found.body();
+    assert_eq!(body.len(), 17);
+    for (i, k) in body.iter().enumerate() {
+        assert_eq!(k.name, COCO_FROM_MEDIAPIPE[i].0);
+        assert_eq!(k.pixel, found.found.points[i] + Vec2::splat(0.5));
+    }
+    // Hands: 21 points each from COCO-WholeBody's hand blocks, kept when seen.
+    for hand in found.hands() {
+        let first = match hand.side {
+            guava::keypoints::Side::Left => 91,
+            guava::keypoints::Side::Right => 112,
+        };
+        assert_eq!(hand.points[0], found.found.points[first] + Vec2::splat(0.5));
+        assert_eq!(hand.points.len(), 21);
+        assert!(hand.presence >= 0.5);
+    }
+
+    // In the keypoint pipeline the body and hand points are EHM-Tracker's, the person's presence
+    // and mask still MediaPipe's.
+    let mut landmarkers = Landmarkers::load(runtime())
+        .expect("shipped models")
+        .with_wholebody(runtime(), &models())
+        .expect("stand-in models");
+    let detections = landmarkers.detect(&source).expect("runs");
+    let mediapipe = landmarkers.pose(&source).expect("runs");
+    assert_eq!(detections.pose.keypoints, body);
+    assert_eq!(detections.hands, found.hands());
+    assert_eq!(detections.pose.presence, mediapipe.presence);
+    assert_eq!(detections.pose.mask, mediapipe.mask);
+}
+
+#[test]
+fn wholebody_folder_errors_name_the_files() {
+    let dir = std::env::temp_dir().join(format!("guava-wholebody-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let err = Wholebody::load_dir(runtime(), &dir)
+        .err()
+        .expect("empty folder");
+    let text = err.to_string();
+    assert!(
+        text.contains("yolox_l.onnx") && text.contains("dw-ll_ucoco_384.onnx"),
+        "{text}"
+    );
+    // MediaPipe's pose model under DWPose's name: the wrong inputs and outputs, named.
+    std::fs::copy(
+        models().join(WHOLEBODY_FILES[0]),
+        dir.join(WHOLEBODY_FILES[0]),
+    )
+    .expect("copy");
+    std::fs::copy(
+        data("assets/models/pose_landmark_full.onnx"),
+        dir.join(WHOLEBODY_FILES[1]),
+    )
+    .expect("copy");
+    let err = Wholebody::load_dir(runtime(), &dir)
+        .err()
+        .expect("wrong model");
+    let text = err.to_string();
+    assert!(
+        text.contains("dw-ll_ucoco_384.onnx") && text.contains("DWPose"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
