@@ -548,7 +548,7 @@ fn fit(
         } else {
             ""
         };
-        format!("fitted by guava fit to {name}: {body_points}{face}, {body}")
+        format!("fitted by guava fit to {name}: {body_points} keypoints{face}, {body}")
     };
     let failed = |e: guava::fit::FitError| anyhow::anyhow!("{}: {e}", image.display());
     let (tracking, report) = match ehm {

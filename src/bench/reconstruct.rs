@@ -11,7 +11,7 @@ use crate::avatar::Rig;
 use crate::body::{BodyModel, BodyPose, EhmModel, PosedBody};
 use crate::fit::{FitInput, embed_face, fit_keypoints};
 use crate::gaussians::GaussianCloud;
-use crate::keypoints::Landmarkers;
+use crate::keypoints::{Landmarkers, Wholebody};
 use crate::onnx::OnnxRuntime;
 use crate::reconstruct::synthetic::{banded_texture, photo, upper_body_camera};
 use crate::reconstruct::{
@@ -28,6 +28,10 @@ pub struct ReconstructBenchArgs {
     /// the making of its linear body.
     #[arg(long)]
     pub ehm: Option<std::path::PathBuf>,
+    /// Also time EHM-Tracker's keypoint models (YOLOX + DWPose, its checkpoint folder) on the
+    /// demo portrait.
+    #[arg(long)]
+    pub dwpose: Option<std::path::PathBuf>,
 }
 
 pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
@@ -121,6 +125,33 @@ pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
         );
         fit_demo_portrait(&linear, args.iterations)?;
     }
+    if let Some(dir) = &args.dwpose {
+        wholebody_on_demo_portrait(dir, args.iterations)?;
+    }
+    Ok(())
+}
+
+/// EHM-Tracker's models (ONNX Runtime, its default CPU threads) on the demo portrait: people,
+/// then DWPose in each person's crop, with their OpenCV-exact preparation and decoding.
+fn wholebody_on_demo_portrait(dir: &std::path::Path, iterations: usize) -> anyhow::Result<()> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png");
+    let source = SourceImage::load(&path)?;
+    let mut models = Wholebody::load_dir(OnnxRuntime::load()?, dir)?;
+    let mut times = Vec::new();
+    let mut people = 0;
+    for i in 0..iterations.min(10) + 1 {
+        let t = Instant::now();
+        people = models.detect(&source)?.people.len();
+        if i > 0 {
+            times.push(ms(t.elapsed()));
+        }
+    }
+    println!(
+        "EHM-Tracker's keypoint models ({}) on the demo portrait: {:.1} ms ({people} people found, \
+         DWPose run on each)",
+        dir.display(),
+        median(times)
+    );
     Ok(())
 }
 

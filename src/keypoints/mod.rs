@@ -148,11 +148,11 @@ impl Landmarkers {
         Ok(self)
     }
 
-    /// Which model places the body and hand points, for reports.
+    /// The model that places the body points, for reports.
     pub fn body_points(&self) -> &'static str {
         match self.wholebody {
-            Some(_) => "EHM-Tracker's DWPose body and hand keypoints",
-            None => "pose_landmark_full keypoints",
+            Some(_) => "EHM-Tracker's DWPose",
+            None => "pose_landmark_full",
         }
     }
 

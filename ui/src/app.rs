@@ -76,6 +76,8 @@ enum Loaded {
     Motion(Imported),
     /// GUAVA's exported networks (GUAVA mode).
     Networks(Box<GuavaModels>),
+    /// EHM-Tracker's keypoint models folder, checked by loading it.
+    Wholebody(PathBuf),
     /// An avatar file, or a reconstruction (then with a summary of what it saw, what the panel
     /// shows of the photo, and the photo's camera).
     Avatar(
@@ -112,6 +114,9 @@ pub struct GuavaApp {
     motion: Option<Motion>,
     /// GUAVA's networks, once the user opened their folder (GUAVA mode with an EHM body).
     networks: Option<Networks>,
+    /// EHM-Tracker's keypoint models folder, once the user opened it: its DWPose places the body
+    /// and hand points when photos are fitted.
+    dwpose: Option<PathBuf>,
     view: View,
     next_generation: u64,
     orbit: OrbitCamera,
@@ -156,6 +161,7 @@ impl GuavaApp {
             avatar: None,
             motion: None,
             networks: None,
+            dwpose: None,
             view: View::Body,
             next_generation: 0,
             orbit: OrbitCamera::default(),
@@ -316,6 +322,14 @@ impl GuavaApp {
         if let Some(n) = &self.networks {
             ui.label(&n.label);
         }
+        ui.label(match &self.dwpose {
+            Some(dir) => format!(
+                "Keypoints: body and hands from EHM-Tracker's DWPose ({}); face, irises and mask \
+                 from MediaPipe's models",
+                dir.display()
+            ),
+            None => "Keypoints: MediaPipe's models (shipped)".into(),
+        });
         let mut pick = None;
         ui.horizontal(|ui| {
             if ui
@@ -336,6 +350,21 @@ impl GuavaApp {
             }
             if ehm && ui.button("Default body").clicked() {
                 self.load_default_body();
+            }
+        });
+        ui.horizontal(|ui| {
+            if ui
+                .button("EHM-Tracker's keypoint models…")
+                .on_hover_text(
+                    "EHM-Tracker's checkpoint folder with yolox_l.onnx and dw-ll_ucoco_384.onnx",
+                )
+                .clicked()
+                && let Some(dir) = rfd::FileDialog::new().pick_folder()
+            {
+                self.open_wholebody(dir);
+            }
+            if self.dwpose.is_some() && ui.button("MediaPipe's keypoints").clicked() {
+                self.dwpose = None;
             }
         });
         if let Some(path) = pick {
@@ -454,10 +483,17 @@ impl GuavaApp {
             Networks,
             Motion,
             Avatar,
-            Photo(Option<PathBuf>, Arc<ViewerBody>),
+            Photo(Option<PathBuf>, PhotoJob),
         }
         use guava::reconstruct::Tracked;
         let kind = match ext.as_deref() {
+            _ if path.is_dir()
+                && guava::keypoints::WHOLEBODY_FILES
+                    .iter()
+                    .all(|f| path.join(f).is_file()) =>
+            {
+                return self.open_wholebody(path);
+            }
             _ if path.is_dir() => Kind::Networks,
             Some("ply") => Kind::Cloud,
             Some("glb") => Kind::Body,
@@ -467,10 +503,10 @@ impl GuavaApp {
             Some("png" | "jpg" | "jpeg") => {
                 // Its tracking file beside it, if there is one; otherwise the pose is fitted.
                 let tracking = guava::reconstruct::tracking_beside(&path);
-                let Some(body) = &self.body else {
+                let Some(job) = self.photo_job() else {
                     return self.error("no body to reconstruct on".into());
                 };
-                Kind::Photo(tracking.is_file().then_some(tracking), body.model.clone())
+                Kind::Photo(tracking.is_file().then_some(tracking), job)
             }
             _ => {
                 self.error(format!(
@@ -482,7 +518,6 @@ impl GuavaApp {
                 return;
             }
         };
-        let networks = self.networks.as_ref().map(|n| n.models.clone());
         let worker_path = path.clone();
         self.spawn_job(
             path,
@@ -491,23 +526,12 @@ impl GuavaApp {
                 Kind::Avatar => Avatar::load(&worker_path)
                     .map(|a| Loaded::Avatar(Box::new(a), None, Preview::None, None))
                     .map_err(|e| e.to_string()),
-                Kind::Photo(tracking, body) => match (&*body, tracking) {
-                    (ViewerBody::Template(body), tracking) => reconstruct_worker(
-                        body,
-                        &worker_path,
-                        tracking.as_deref().map_or(Tracked::Fit, Tracked::File),
-                        worker_stage,
-                        worker_cancel,
-                    ),
-                    (ViewerBody::Ehm(body), tracking) => guava_worker(
-                        body,
-                        networks.as_deref(),
-                        &worker_path,
-                        tracking.as_deref().map_or(Tracked::Fit, Tracked::File),
-                        worker_stage,
-                        worker_cancel,
-                    ),
-                },
+                Kind::Photo(tracking, job) => job.run(
+                    &worker_path,
+                    tracking.as_deref().map_or(Tracked::Fit, Tracked::File),
+                    worker_stage,
+                    worker_cancel,
+                ),
                 Kind::Body => BodyModel::load(&worker_path)
                     .map(|m| Loaded::Body(ViewerBody::Template(Arc::new(m))))
                     .map_err(|e| e.to_string()),
@@ -530,6 +554,30 @@ impl GuavaApp {
                     .map_err(|e| e.to_string()),
             },
         );
+    }
+
+    /// Checks EHM-Tracker's keypoint models folder by loading it on a worker thread; once it
+    /// loads, photos are fitted with its body and hand points.
+    fn open_wholebody(&mut self, dir: PathBuf) {
+        let worker_dir = dir.clone();
+        self.spawn_job(dir, "loading EHM-Tracker's keypoint models", move |_, _| {
+            guava::onnx::OnnxRuntime::load()
+                .map_err(|e| e.to_string())
+                .and_then(|rt| {
+                    guava::keypoints::Wholebody::load_dir(rt, &worker_dir)
+                        .map_err(|e| e.to_string())
+                })
+                .map(|_| Loaded::Wholebody(worker_dir))
+        });
+    }
+
+    /// What a photo's reconstruction needs from the app (`None` without a body).
+    fn photo_job(&self) -> Option<PhotoJob> {
+        Some(PhotoJob {
+            body: self.body.as_ref()?.model.clone(),
+            networks: self.networks.as_ref().map(|n| n.models.clone()),
+            dwpose: self.dwpose.clone(),
+        })
     }
 
     /// Runs `job` on a worker thread, showing its stage with a Cancel button; what it loads is
@@ -559,26 +607,13 @@ impl GuavaApp {
 
     /// Reconstructs the avatar's source photo again with `view` (the fit adjusted by hand).
     pub fn reconstruct_with_pose(&mut self, photo: PathBuf, view: guava::reconstruct::SourceView) {
-        let Some(body) = self.body.as_ref().map(|b| b.model.clone()) else {
+        let Some(job) = self.photo_job() else {
             return self.error("no body to reconstruct on".into());
         };
-        let networks = self.networks.as_ref().map(|n| n.models.clone());
         let worker_photo = photo.clone();
         self.spawn_job(photo, "reading", move |stage, cancel| {
             let given = guava::reconstruct::Tracked::Given(view);
-            match &*body {
-                ViewerBody::Template(model) => {
-                    reconstruct_worker(model, &worker_photo, given, stage, cancel)
-                }
-                ViewerBody::Ehm(model) => guava_worker(
-                    model,
-                    networks.as_deref(),
-                    &worker_photo,
-                    given,
-                    stage,
-                    cancel,
-                ),
-            }
+            job.run(&worker_photo, given, stage, cancel)
         });
     }
 
@@ -637,7 +672,7 @@ impl GuavaApp {
                 )
                 .map(|(a, r)| {
                     let camera = (view.camera.view_from_world, view.camera.invtanfov());
-                    let summary = Some(default_summary(&r));
+                    let summary = Some(default_summary(&r, None));
                     Loaded::Avatar(Box::new(a), summary, Preview::None, Some(camera))
                 })
                 .map_err(|e| e.to_string())
@@ -789,6 +824,17 @@ impl GuavaApp {
                     Ok(Loaded::Cloud(cloud)) => self.accept_loaded(&path, cloud),
                     Ok(Loaded::Body(model)) => self.set_body(model, &path.display().to_string()),
                     Ok(Loaded::Networks(models)) => self.set_networks(*models),
+                    Ok(Loaded::Wholebody(dir)) => {
+                        self.status = Some((
+                            format!(
+                                "EHM-Tracker's keypoint models: {} (DWPose places the body and \
+                                 hand points of fitted photos)",
+                                dir.display()
+                            ),
+                            false,
+                        ));
+                        self.dwpose = Some(dir);
+                    }
                     Ok(Loaded::Motion(imported)) => {
                         let label = format!("{} — {}", file_name(&path), imported.tracking.source);
                         self.set_motion(label, imported);
@@ -1277,17 +1323,53 @@ fn progress<'a>(
     }
 }
 
+/// What reconstructing a photo needs from the app, moved to its worker.
+struct PhotoJob {
+    body: Arc<ViewerBody>,
+    networks: Option<Arc<Mutex<GuavaModels>>>,
+    /// EHM-Tracker's keypoint models folder, when the user chose it.
+    dwpose: Option<PathBuf>,
+}
+
+impl PhotoJob {
+    /// The default reconstruction on a template body, GUAVA's on an EHM body.
+    fn run(
+        &self,
+        photo: &Path,
+        tracked: guava::reconstruct::Tracked,
+        stage: &Mutex<&'static str>,
+        cancel: &AtomicBool,
+    ) -> Result<Loaded, String> {
+        let dwpose = self.dwpose.as_deref();
+        match &*self.body {
+            ViewerBody::Template(body) => {
+                reconstruct_worker(body, photo, tracked, dwpose, stage, cancel)
+            }
+            ViewerBody::Ehm(body) => guava_worker(
+                body,
+                self.networks.as_deref(),
+                photo,
+                tracked,
+                dwpose,
+                stage,
+                cancel,
+            ),
+        }
+    }
+}
+
 fn reconstruct_worker(
     body: &BodyModel,
     photo: &Path,
     tracked: guava::reconstruct::Tracked,
+    dwpose: Option<&Path>,
     stage: &Mutex<&'static str>,
     cancel: &AtomicBool,
 ) -> Result<Loaded, String> {
     use guava::reconstruct::{DEFAULT_UV_SIZE, UvMap, reconstruct_photo_file};
     // The pose and face models fit photos without tracking; the pose model masks photos without
     // alpha (else the body's silhouette does).
-    let mut model = keypoint_models(photo, &tracked, stage)?;
+    let mut model = keypoint_models(photo, &tracked, dwpose, stage)?;
     *stage.lock().unwrap_or_else(|e| e.into_inner()) = "building the UV map";
     let uv = UvMap::for_body(body, DEFAULT_UV_SIZE);
     let (avatar, report, view) = reconstruct_photo_file(
@@ -1311,23 +1393,31 @@ fn reconstruct_worker(
     .map_or(Preview::None, |p| Preview::Fit(Box::new(p)));
     Ok(Loaded::Avatar(
         Box::new(avatar),
-        Some(default_summary(&report)),
+        Some(default_summary(&report, model.as_ref())),
         preview,
         Some(camera),
     ))
 }
 
-/// The keypoint models for reconstructing `photo`: fitting needs them (their error is the
-/// job's), otherwise they are optional (a warning, and `None`).
+/// The keypoint models for reconstructing `photo` (with EHM-Tracker's from `dwpose`):
+/// fitting needs them (their error is the job's), otherwise they are optional (a warning, and
+/// `None`).
 fn keypoint_models(
     photo: &Path,
     tracked: &guava::reconstruct::Tracked,
+    dwpose: Option<&Path>,
     stage: &Mutex<&'static str>,
 ) -> Result<Option<guava::keypoints::Landmarkers>, String> {
+    use guava::keypoints::Landmarkers;
     *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the keypoint models";
-    let loaded = guava::onnx::OnnxRuntime::load()
-        .map_err(|e| e.to_string())
-        .and_then(|rt| guava::keypoints::Landmarkers::load(rt).map_err(|e| e.to_string()));
+    let loaded = guava::onnx::OnnxRuntime::load().and_then(|rt| {
+        let models = Landmarkers::load(rt)?;
+        match dwpose {
+            Some(dir) => models.with_wholebody(rt, dir),
+            None => Ok(models),
+        }
+    });
+    let loaded = loaded.map_err(|e| e.to_string());
     match loaded {
         Ok(m) => Ok(Some(m)),
         Err(e) if matches!(tracked, guava::reconstruct::Tracked::Fit) => Err(format!(
@@ -1342,9 +1432,16 @@ fn keypoint_models(
 }
 
 /// What a default reconstruction saw and how long it took, for the avatar's label.
-fn default_summary(r: &guava::reconstruct::Report) -> String {
+fn default_summary(
+    r: &guava::reconstruct::Report,
+    models: Option<&guava::keypoints::Landmarkers>,
+) -> String {
     let ms: f64 = r.timings.iter().map(|(_, d)| d.as_secs_f64() * 1e3).sum();
-    let mut summary = r.fit.as_ref().map(fit_summary).unwrap_or_default();
+    let mut summary = r
+        .fit
+        .as_ref()
+        .map(|f| fit_summary(f, models))
+        .unwrap_or_default();
     summary.push_str(&format!(
         "{} of {} texels seen, {} mirrored, rest inpainted; {ms:.0} ms",
         r.observed, r.texels, r.mirrored
@@ -1353,12 +1450,17 @@ fn default_summary(r: &guava::reconstruct::Report) -> String {
 }
 
 /// How the source view was fitted, for the avatar's label (ends with "; ").
-fn fit_summary(f: &guava::fit::FitReport) -> String {
+fn fit_summary(
+    f: &guava::fit::FitReport,
+    models: Option<&guava::keypoints::Landmarkers>,
+) -> String {
     let mut summary = String::new();
     {
         summary.push_str(&format!(
-            "pose and camera fitted to {} keypoints ({:.1} px RMS)",
-            f.keypoints_used, f.rms_px
+            "pose and camera fitted to {} keypoints{} ({:.1} px RMS)",
+            f.keypoints_used,
+            models.map_or(String::new(), |m| format!(" of {}", m.body_points())),
+            f.rms_px
         ));
         match (&f.face, &f.face_skipped) {
             (Some(face), _) => summary.push_str(&format!(
@@ -1382,6 +1484,7 @@ fn guava_worker(
     networks: Option<&Mutex<GuavaModels>>,
     photo: &Path,
     tracked: guava::reconstruct::Tracked,
+    dwpose: Option<&Path>,
     stage: &Mutex<&'static str>,
     cancel: &AtomicBool,
 ) -> Result<Loaded, String> {
@@ -1400,7 +1503,7 @@ fn guava_worker(
         None
     } else {
         // reconstruct_guava_file says what is missing if the photo needs its mask.
-        keypoint_models(photo, &tracked, stage)?
+        keypoint_models(photo, &tracked, dwpose, stage)?
     };
     let mut models = networks.lock().unwrap_or_else(|e| e.into_inner());
     let uv = uv_map(body, models.dims.uv as u32);
@@ -1418,7 +1521,10 @@ fn guava_worker(
     let summary = format!(
         "networks: {}; {}{} of {} texels on faces the photo shows, {} Gaussians pruned; {ms:.0} ms",
         models.source,
-        r.fit.as_ref().map(fit_summary).unwrap_or_default(),
+        r.fit
+            .as_ref()
+            .map(|f| fit_summary(f, landmarkers.as_ref()))
+            .unwrap_or_default(),
         r.observed_texels,
         r.texels,
         r.pruned

@@ -548,7 +548,7 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
     });
     let (label, _) = h.state().avatar_info().expect("reconstructed");
     assert!(
-        label.contains("pose and camera fitted to 11 keypoints"),
+        label.contains("pose and camera fitted to 11 keypoints of pose_landmark_full"),
         "{label}"
     );
     h.run();
@@ -569,5 +569,42 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
     });
     let (label, _) = h.state().avatar_info().expect("reconstructed");
     assert!(label.starts_with("GUAVA reconstruction"), "{label}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// EHM-Tracker's keypoint models folder (the stand-in models of tests/data/dwpose) opened like
+/// any file: the Mode panel says the body and hand points now come from its DWPose, a photo
+/// without tracking is fitted to them (its label says so), and *MediaPipe's keypoints* goes back.
+#[test]
+fn ehm_trackers_keypoint_models_place_the_fits_points() {
+    let mut h = harness(Options::default());
+    h.run();
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data");
+    h.get_by_label("Keypoints: MediaPipe's models (shipped)");
+    h.state_mut().open(data.join("dwpose"));
+    wait_for_status(&mut h, "EHM-Tracker's keypoint models");
+    h.run();
+    h.get_by_label_contains("Keypoints: body and hands from EHM-Tracker's DWPose");
+
+    let dir = std::env::temp_dir().join(format!("guava-ui-dwpose-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let portrait = dir.join("portrait.png");
+    std::fs::copy(data.join("../../assets/demo_portrait.png"), &portrait).expect("copy");
+    h.state_mut().open(portrait);
+    wait_until(&mut h, |app| {
+        app.avatar_info()
+            .is_some_and(|(l, _)| l.contains("portrait.png"))
+    });
+    let (label, _) = h.state().avatar_info().expect("reconstructed");
+    assert!(
+        label.contains("fitted to 11 keypoints of EHM-Tracker's DWPose"),
+        "{label}"
+    );
+    // The Body view's panel, short enough that the Mode buttons are on screen to click.
+    h.state_mut().set_view(View::Body);
+    h.run();
+    h.get_by_label("MediaPipe's keypoints").click();
+    h.run();
+    h.get_by_label("Keypoints: MediaPipe's models (shipped)");
     std::fs::remove_dir_all(&dir).ok();
 }
