@@ -46,6 +46,22 @@ use glam::Vec2;
 use crate::onnx::{OnnxError, OnnxRuntime};
 use crate::reconstruct::SourceImage;
 
+/// One error naming every file of `files` that `dir` (`what`) lacks.
+fn check_folder(dir: &Path, files: &[&str], what: &str) -> Result<(), OnnxError> {
+    let missing: Vec<&str> = files
+        .iter()
+        .copied()
+        .filter(|f| !dir.join(f).is_file())
+        .collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    Err(OnnxError::Model {
+        path: dir.to_path_buf(),
+        reason: format!("{what} lacks {}", missing.join(", ")),
+    })
+}
+
 /// One keypoint: a named landmark's image position and how sure the model is that it is visible.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Keypoint {
@@ -117,17 +133,7 @@ impl Landmarkers {
     /// and outputs (a user's own conversions or retrained models). Missing files are listed in
     /// one error; each file is checked for its model's inputs and outputs.
     pub fn load_dir(runtime: &OnnxRuntime, dir: &Path) -> Result<Self, OnnxError> {
-        let missing: Vec<&str> = MODEL_FILES
-            .iter()
-            .copied()
-            .filter(|f| !dir.join(f).is_file())
-            .collect();
-        if !missing.is_empty() {
-            return Err(OnnxError::Model {
-                path: dir.to_path_buf(),
-                reason: format!("the keypoint model folder lacks {}", missing.join(", ")),
-            });
-        }
+        check_folder(dir, &MODEL_FILES, "the keypoint model folder")?;
         let [detector, pose, face, hand, iris, palm, face_detector] =
             MODEL_FILES.map(|f| dir.join(f));
         Ok(Self {

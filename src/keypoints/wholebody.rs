@@ -16,7 +16,7 @@ use glam::Vec2;
 use super::hand::{HAND_POINTS, HandLandmarks, Side};
 use super::simcc::{SimccLandmarker, SimccPoints};
 use super::yolox::{PersonBox, PersonDetector};
-use super::{COCO_FROM_MEDIAPIPE, Keypoint, Roi};
+use super::{COCO_FROM_MEDIAPIPE, Keypoint, Roi, check_folder};
 use crate::onnx::{OnnxError, OnnxRuntime};
 use crate::reconstruct::SourceImage;
 
@@ -38,20 +38,7 @@ pub struct Wholebody {
 impl Wholebody {
     /// The two models from EHM-Tracker's checkpoint folder; missing files are named in one error.
     pub fn load_dir(runtime: &OnnxRuntime, dir: &Path) -> Result<Self, OnnxError> {
-        let missing: Vec<&str> = WHOLEBODY_FILES
-            .iter()
-            .copied()
-            .filter(|f| !dir.join(f).is_file())
-            .collect();
-        if !missing.is_empty() {
-            return Err(OnnxError::Model {
-                path: dir.to_path_buf(),
-                reason: format!(
-                    "EHM-Tracker's keypoint model folder lacks {}",
-                    missing.join(", ")
-                ),
-            });
-        }
+        check_folder(dir, &WHOLEBODY_FILES, "EHM-Tracker's keypoint model folder")?;
         let [person, pose] = WHOLEBODY_FILES.map(|f| dir.join(f));
         Ok(Self {
             person: PersonDetector::load_from(runtime, &person)?,

@@ -178,6 +178,24 @@ fn wait_until(h: &mut Harness<'static, GuavaApp>, done: impl Fn(&GuavaApp) -> bo
     }
 }
 
+/// Opens the demo portrait (copied into `dir` without its tracking, so it is fitted) and waits
+/// for its avatar; returns the avatar's label.
+fn reconstruct_demo_portrait(h: &mut Harness<'static, GuavaApp>, dir: &std::path::Path) -> String {
+    let portrait = dir.join("portrait.png");
+    let shipped = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/demo_portrait.png");
+    std::fs::copy(shipped, &portrait).expect("copy");
+    h.state_mut().open(portrait);
+    wait_until(h, |app| {
+        app.avatar_info()
+            .is_some_and(|(l, _)| l.contains("portrait.png"))
+    });
+    h.state()
+        .avatar_info()
+        .expect("reconstructed")
+        .0
+        .to_string()
+}
+
 /// Steps the app until its status line mentions `needle`; returns the status line.
 fn wait_for_status(h: &mut Harness<'static, GuavaApp>, needle: &str) -> String {
     wait_until(h, |app| app.status().is_some_and(|s| s.contains(needle)));
@@ -539,14 +557,7 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
         "{status}"
     );
     assert_eq!(h.state().avatar_info().map(|(_, n)| n), Some(count));
-    let portrait = dir.join("portrait.png");
-    std::fs::copy(data.join("../../assets/demo_portrait.png"), &portrait).expect("copy");
-    h.state_mut().open(portrait);
-    wait_until(&mut h, |app| {
-        app.avatar_info()
-            .is_some_and(|(l, _)| l.contains("portrait.png"))
-    });
-    let (label, _) = h.state().avatar_info().expect("reconstructed");
+    let label = reconstruct_demo_portrait(&mut h, &dir);
     assert!(
         label.contains("pose and camera fitted to 11 keypoints of pose_landmark_full"),
         "{label}"
@@ -588,14 +599,7 @@ fn ehm_trackers_keypoint_models_place_the_fits_points() {
 
     let dir = std::env::temp_dir().join(format!("guava-ui-dwpose-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
-    let portrait = dir.join("portrait.png");
-    std::fs::copy(data.join("../../assets/demo_portrait.png"), &portrait).expect("copy");
-    h.state_mut().open(portrait);
-    wait_until(&mut h, |app| {
-        app.avatar_info()
-            .is_some_and(|(l, _)| l.contains("portrait.png"))
-    });
-    let (label, _) = h.state().avatar_info().expect("reconstructed");
+    let label = reconstruct_demo_portrait(&mut h, &dir);
     assert!(
         label.contains("fitted to 11 keypoints of EHM-Tracker's DWPose"),
         "{label}"
