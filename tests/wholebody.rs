@@ -3,12 +3,15 @@
 //! real ones' inputs and outputs (tools/make_dwpose_fixture.py; the real weights are not in any
 //! package registry).
 
-use glam::{DVec2, Vec2};
+use glam::{DVec2, Vec2, Vec3};
+use guava::body::{BodyModel, PosedBody};
+use guava::fit::fit_detections;
 use guava::keypoints::{
-    COCO_FROM_MEDIAPIPE, Landmarkers, PersonDetector, SimccLandmarker, WHOLEBODY_FILES, Wholebody,
+    COCO_FROM_MEDIAPIPE, Keypoint, Landmarkers, PersonDetector, SimccLandmarker, WHOLEBODY_FILES,
+    Wholebody,
 };
 use guava::onnx::OnnxRuntime;
-use guava::reconstruct::SourceImage;
+use guava::reconstruct::{SourceImage, SourceView};
 use std::path::{Path, PathBuf};
 
 fn runtime() -> &'static OnnxRuntime {
@@ -243,4 +246,111 @@ fn wholebody_folder_errors_name_the_files() {
         "{text}"
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The head and shoulders of a fitted view in the camera's frame (metres), by COCO name.
+fn head_and_shoulders(body: &BodyModel, view: &SourceView) -> Vec<(String, Vec3)> {
+    let mut posed = PosedBody::default();
+    body.pose(&view.pose, &mut posed).expect("poses");
+    COCO_FROM_MEDIAPIPE[..7]
+        .iter()
+        .map(|&(name, _)| {
+            let l = body
+                .landmarks
+                .iter()
+                .find(|l| l.name == name)
+                .expect("a COCO landmark");
+            let world: Vec3 = l
+                .vertices
+                .iter()
+                .zip(&l.weights)
+                .map(|(&v, &w)| w * posed.vertices[v as usize])
+                .sum();
+            (
+                name.to_string(),
+                view.camera.view_from_world.transform_point3(world),
+            )
+        })
+        .collect()
+}
+
+/// What the fit makes of DWPose's layout, end to end: an oracle DWPose (tests/data/dwpose_oracle)
+/// answers the same body points whatever it sees (MediaPipe's TFLite answer on the demo
+/// portrait), so the pipeline must hand the fit those points, under COCO's names, seen where the
+/// oracle is sure, and no hands (it is unsure of them); and the fit of what the pipeline hands it
+/// must match the fit of those points given directly — a point given the wrong name or side
+/// would turn the body, or mirror it to face away.
+#[test]
+fn the_fit_reads_dwposes_points_as_given() {
+    let source = portrait();
+    let oracle = &fixture()["oracle"];
+    let mut models = Landmarkers::load(runtime())
+        .expect("shipped models")
+        .with_wholebody(runtime(), &data("tests/data/dwpose_oracle"))
+        .expect("oracle models");
+    let found = models.detect(&source).expect("runs");
+    let seen: Vec<bool> = oracle["seen"]
+        .as_array()
+        .expect("seen")
+        .iter()
+        .map(|s| s.as_bool().expect("bool"))
+        .collect();
+    let given: Vec<Keypoint> = COCO_FROM_MEDIAPIPE
+        .iter()
+        .zip(points(&oracle["points"]))
+        .zip(&seen)
+        .map(|((&(name, _), pixel), &seen)| Keypoint {
+            name,
+            pixel,
+            confidence: if seen { 1.0 } else { 0.0 },
+        })
+        .collect();
+    // One SimCC bin is half an input pixel: 640 / 288 / 2 = 1.1 photo pixels.
+    let bin = 640.0 / 288.0 / 2.0;
+    for (k, g) in found.pose.keypoints.iter().zip(&given) {
+        let off = (k.pixel - g.pixel).abs().max_element();
+        assert!(
+            k.name == g.name && off <= bin / 2.0 + 1e-3,
+            "{}: {off} px",
+            k.name
+        );
+        assert_eq!(k.confidence >= 0.5, g.confidence > 0.5, "{}", k.name);
+    }
+    assert!(found.hands.is_empty());
+
+    let body = BodyModel::default_body().expect("default body");
+    let mut direct = found.clone();
+    direct.pose.keypoints = given;
+    let (through, t) = fit_detections(&body, &found, &mut models.face, source.size).expect("fits");
+    let (reference, r) =
+        fit_detections(&body, &direct, &mut models.face, source.size).expect("fits");
+    let (a, b) = (
+        head_and_shoulders(&body, &reference),
+        head_and_shoulders(&body, &through),
+    );
+    let worst = a
+        .iter()
+        .zip(&b)
+        // Across the view: along it, 2D points leave the depth loose (as camera depth below).
+        .map(|((_, p), (_, q))| (*p / p.z - *q / q.z).truncate().length() * p.z.abs())
+        .fold(0.0, f32::max);
+    let depth = (a[0].1.z / b[0].1.z - 1.0).abs();
+    println!(
+        "oracle DWPose through the pipeline vs its points given: {} / {} body keypoints at \
+         {:.2} / {:.2} px RMS; head and shoulders {:.2} cm apart across the view at most, camera depth {:.2} % apart",
+        t.keypoints_used,
+        r.keypoints_used,
+        t.rms_px,
+        r.rms_px,
+        worst * 100.0,
+        depth * 100.0
+    );
+    assert_eq!(t.keypoints_used, r.keypoints_used);
+    // The pipeline's points are the given ones to within half a bin (0.56 px, ~1 mm here).
+    assert!(worst < 0.005, "{worst} m");
+    assert!(depth < 0.01, "{depth}");
+    // Facing the camera (GUAVA's looks along +z): the nose nearer than both ears, the subject's
+    // left on the image's right.
+    assert!(b[0].1.z < b[3].1.z.min(b[4].1.z), "{b:?}");
+    assert!(b[1].1.x > b[2].1.x && b[5].1.x > b[6].1.x, "{b:?}");
 }

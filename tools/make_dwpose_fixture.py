@@ -11,7 +11,9 @@ registry, so this script writes two small stand-ins with exactly their inputs an
 - tests/data/dwpose/dw-ll_ucoco_384.onnx: input `input` [1,3,384,288] (RGB normalised by
   ImageNet's mean and std), outputs `simcc_x` [1,133,576] and `simcc_y` [1,133,768] (per point a
   Gaussian bump of height `score` at a place that depends on the input's 96×96 block averages),
-so that the crop, the normalisation and the decoding all change the answer. It then runs
+so that the crop, the normalisation and the decoding all change the answer; and an oracle pair
+in tests/data/dwpose_oracle/ (YOLOX finding nobody, DWPose answering MediaPipe's body points on
+the demo portrait whatever it sees) for checking what the fit makes of DWPose's points. It then runs
 EHM-Tracker's own pre- and post-processing (`onnxdet.py`, `onnxpose.py` from
 ../shared/reference/EHM-Tracker, imported by path) on the demo portrait and writes what they give:
 - tests/data/dwpose/fixture.json: the person boxes, and for the largest person (as
@@ -38,7 +40,10 @@ from onnx import TensorProto, helper, numpy_helper
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "tests", "data", "dwpose")
 DWPOSE = os.path.join(ROOT, "..", "shared", "reference", "EHM-Tracker", "src", "modules", "dwpose")
+ORACLE = os.path.join(ROOT, "tests", "data", "dwpose_oracle")
 POINTS = 133
+# MediaPipe's pose landmarks in COCO's body order (nose, eyes, ears, shoulders … ankles).
+COCO_FROM_MEDIAPIPE = [0, 2, 5, 7, 8, 11, 12, 13, 14, 15, 16, 23, 24, 25, 26, 27, 28]
 BLOCK = 96
 
 
@@ -60,13 +65,13 @@ def save(graph, path):
     onnx.save(model, path)
 
 
-def yolox(rng, path):
+def yolox(rng, path, objectness=-2.3):
     nodes, inits, heads = [], [], []
     for s in (8, 16, 32):
         w = rng.normal(0.0, 1.0 / 255.0, (85, 3, 1, 1))
         b = np.zeros(85)
         b[2:4] = np.log(6.0)  # boxes about six cells wide and high
-        b[4] = -2.3  # objectness: a few boxes pass
+        b[4] = objectness  # the default lets a few boxes pass
         b[5] = 1.0  # class 0, a person
         b[6:] = -2.0
         w[4:6] *= 4.0  # objectness and person follow the colours strongly
@@ -99,6 +104,7 @@ def yolox(rng, path):
 
 
 def dwpose(rng, path):
+    """Per point a place and a score from the input's 96×96 block averages."""
     features = 3 * (384 // BLOCK) * (288 // BLOCK)
     w = rng.normal(0.0, 0.6, (features, POINTS * 3))
     b = np.zeros(POINTS * 3)
@@ -114,8 +120,30 @@ def dwpose(rng, path):
         const("w", w),
         const("b", b),
         numpy_helper.from_array(np.array([1, POINTS, 3], dtype=np.int64), "shape3"),
+    ]
+    simcc(nodes, inits, "dwpose_stand_in", path)
+
+
+def oracle(bins, scores, path):
+    """Answers the same points whatever it sees: x and y bins and scores per point."""
+    unit = np.stack([bins[:, 0] / 575.0, bins[:, 1] / 767.0, np.asarray(scores) / 1.2], axis=1)
+    nodes = [helper.make_node("Identity", ["answer"], ["unit"])]
+    simcc(nodes, [const("answer", unit.reshape(1, POINTS, 3))], "dwpose_oracle", path)
+
+
+def simcc(nodes, inits, name, path):
+    """DWPose's outputs from `unit` [1,133,3] (x and y as fractions of the bins, score / 1.2):
+    per point a Gaussian bump of that height at that place along each axis."""
+    nodes = list(nodes) + [
+        helper.make_node("Slice", ["unit", "s2", "s3", "ax2"], ["u2"]),
+        helper.make_node("Mul", ["u2", "score_scale"], ["score"]),
+    ]
+    inits = list(inits) + [
         const("sigma2", [2.0 * 6.0**2]),
         const("score_scale", [1.2]),
+        numpy_helper.from_array(np.array([2], dtype=np.int64), "s2"),
+        numpy_helper.from_array(np.array([3], dtype=np.int64), "s3"),
+        numpy_helper.from_array(np.array([2], dtype=np.int64), "ax2"),
     ]
     for axis, bins, out in ((0, 576, "simcc_x"), (1, 768, "simcc_y")):
         inits += [
@@ -134,16 +162,9 @@ def dwpose(rng, path):
             helper.make_node("Exp", [f"nq{axis}"], [f"bump{axis}"]),
             helper.make_node("Mul", [f"bump{axis}", "score"], [out]),
         ]
-    inits += [
-        numpy_helper.from_array(np.array([2], dtype=np.int64), "s2"),
-        numpy_helper.from_array(np.array([3], dtype=np.int64), "s3"),
-        numpy_helper.from_array(np.array([2], dtype=np.int64), "ax2"),
-    ]
-    nodes.insert(6, helper.make_node("Slice", ["unit", "s2", "s3", "ax2"], ["u2"]))
-    nodes.insert(7, helper.make_node("Mul", ["u2", "score_scale"], ["score"]))
     graph = helper.make_graph(
         nodes,
-        "dwpose_stand_in",
+        name,
         [helper.make_tensor_value_info("input", TensorProto.FLOAT, [1, 3, 384, 288])],
         [
             helper.make_tensor_value_info("simcc_x", TensorProto.FLOAT, [1, POINTS, 576]),
@@ -198,9 +219,35 @@ def main():
             "points": np.asarray(pts).tolist(),
             "scores": np.asarray(sc).tolist(),
         }
+    fixture["oracle"] = make_oracle(rng_oracle=np.random.default_rng(8))
     with open(os.path.join(OUT, "fixture.json"), "w") as f:
         json.dump(fixture, f)
-    print(f"{len(boxes)} person boxes; wrote {OUT}")
+    print(f"{len(boxes)} person boxes; wrote {OUT} and {ORACLE}")
+
+
+def make_oracle(rng_oracle):
+    """The oracle pair: YOLOX finding nobody (so DWPose sees the whole photo) and a DWPose that
+    answers MediaPipe's COCO points on the demo portrait (its TFLite pose landmarks on the whole
+    photo, tests/data/pose_landmark_fixture.json) with score 0.9 where MediaPipe is confident,
+    every other point (feet, face, hands) unsure at the crop's centre. Returns the points it
+    answers in pixel-edge coordinates of the 512² photo and whether each is seen."""
+    os.makedirs(ORACLE, exist_ok=True)
+    yolox(rng_oracle, os.path.join(ORACLE, "yolox_l.onnx"), objectness=-30.0)
+    with open(os.path.join(ROOT, "tests", "data", "pose_landmark_fixture.json")) as f:
+        landmarks = np.asarray(json.load(f)["landmarks"], dtype=np.float64)
+    sigmoid = lambda v: 1.0 / (1.0 + np.exp(-v))
+    coco = landmarks[COCO_FROM_MEDIAPIPE]
+    edge = coco[:, :2] * (512.0 / 256.0)
+    seen = sigmoid(coco[:, 3]) * sigmoid(coco[:, 4]) >= 0.5
+    # The whole photo's crop as onnxpose.py makes it: box (0, 0, 512, 512) × 1.25 to 3:4.
+    centre, scale = np.array([256.0, 256.0]), np.array([640.0, 640.0 / 0.75])
+    input_size = np.array([288.0, 384.0])
+    bins = np.tile(input_size, (POINTS, 1))  # unsure points: the crop's centre, in bins
+    bins[: len(coco)] = ((edge - 0.5) - (centre - scale / 2)) / scale * input_size * 2.0
+    scores = np.full(POINTS, 0.05)
+    scores[: len(coco)] = np.where(seen, 0.9, 0.05)
+    oracle(bins, scores, os.path.join(ORACLE, "dw-ll_ucoco_384.onnx"))
+    return {"points": edge.tolist(), "seen": seen.tolist()}
 
 
 if __name__ == "__main__":
