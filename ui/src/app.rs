@@ -117,6 +117,8 @@ pub struct GuavaApp {
     /// EHM-Tracker's keypoint models folder, once the user opened it: its DWPose places the body
     /// and hand points when photos are fitted.
     dwpose: Option<PathBuf>,
+    /// The keypoint models photo jobs use, kept between jobs.
+    keypoint_models: Arc<Mutex<KeypointModels>>,
     view: View,
     next_generation: u64,
     orbit: OrbitCamera,
@@ -162,6 +164,7 @@ impl GuavaApp {
             motion: None,
             networks: None,
             dwpose: None,
+            keypoint_models: Arc::default(),
             view: View::Body,
             next_generation: 0,
             orbit: OrbitCamera::default(),
@@ -577,6 +580,7 @@ impl GuavaApp {
             body: self.body.as_ref()?.model.clone(),
             networks: self.networks.as_ref().map(|n| n.models.clone()),
             dwpose: self.dwpose.clone(),
+            keypoint_models: self.keypoint_models.clone(),
         })
     }
 
@@ -1329,6 +1333,7 @@ struct PhotoJob {
     networks: Option<Arc<Mutex<GuavaModels>>>,
     /// EHM-Tracker's keypoint models folder, when the user chose it.
     dwpose: Option<PathBuf>,
+    keypoint_models: Arc<Mutex<KeypointModels>>,
 }
 
 impl PhotoJob {
@@ -1340,17 +1345,22 @@ impl PhotoJob {
         stage: &Mutex<&'static str>,
         cancel: &AtomicBool,
     ) -> Result<Loaded, String> {
-        let dwpose = self.dwpose.as_deref();
+        // One job runs at a time, so holding the models for the whole job blocks nobody.
+        let mut keypoints = self
+            .keypoint_models
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        keypoints.wanted = self.dwpose.clone();
         match &*self.body {
             ViewerBody::Template(body) => {
-                reconstruct_worker(body, photo, tracked, dwpose, stage, cancel)
+                reconstruct_worker(body, photo, tracked, &mut keypoints, stage, cancel)
             }
             ViewerBody::Ehm(body) => guava_worker(
                 body,
                 self.networks.as_deref(),
                 photo,
                 tracked,
-                dwpose,
+                &mut keypoints,
                 stage,
                 cancel,
             ),
@@ -1362,14 +1372,14 @@ fn reconstruct_worker(
     body: &BodyModel,
     photo: &Path,
     tracked: guava::reconstruct::Tracked,
-    dwpose: Option<&Path>,
+    keypoints: &mut KeypointModels,
     stage: &Mutex<&'static str>,
     cancel: &AtomicBool,
 ) -> Result<Loaded, String> {
     use guava::reconstruct::{DEFAULT_UV_SIZE, UvMap, reconstruct_photo_file};
     // The pose and face models fit photos without tracking; the pose model masks photos without
     // alpha (else the body's silhouette does).
-    let mut model = keypoint_models(photo, &tracked, dwpose, stage)?;
+    let mut model = keypoints.get(photo, &tracked, stage)?;
     *stage.lock().unwrap_or_else(|e| e.into_inner()) = "building the UV map";
     let uv = UvMap::for_body(body, DEFAULT_UV_SIZE);
     let (avatar, report, view) = reconstruct_photo_file(
@@ -1377,7 +1387,7 @@ fn reconstruct_worker(
         &uv,
         photo,
         tracked,
-        model.as_mut(),
+        model.as_deref_mut(),
         &mut progress(stage, cancel),
     )
     .map_err(|e| e.to_string())?;
@@ -1393,41 +1403,59 @@ fn reconstruct_worker(
     .map_or(Preview::None, |p| Preview::Fit(Box::new(p)));
     Ok(Loaded::Avatar(
         Box::new(avatar),
-        Some(default_summary(&report, model.as_ref())),
+        Some(default_summary(&report, model.as_deref())),
         preview,
         Some(camera),
     ))
 }
 
-/// The keypoint models for reconstructing `photo` (with EHM-Tracker's from `dwpose`):
-/// fitting needs them (their error is the job's), otherwise they are optional (a warning, and
-/// `None`).
-fn keypoint_models(
-    photo: &Path,
-    tracked: &guava::reconstruct::Tracked,
-    dwpose: Option<&Path>,
-    stage: &Mutex<&'static str>,
-) -> Result<Option<guava::keypoints::Landmarkers>, String> {
-    use guava::keypoints::Landmarkers;
-    *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the keypoint models";
-    let loaded = guava::onnx::OnnxRuntime::load().and_then(|rt| {
-        let models = Landmarkers::load(rt)?;
-        match dwpose {
-            Some(dir) => models.with_wholebody(rt, dir),
-            None => Ok(models),
+/// The keypoint models photo jobs use: loaded by the first job that needs them and kept for the
+/// next (MediaPipe's seven take ~0.4 s to load, EHM-Tracker's are hundreds of MB), loaded again
+/// when the user wants other ones.
+#[derive(Default)]
+struct KeypointModels {
+    /// EHM-Tracker's folder the next job wants (`None`: MediaPipe's models alone).
+    wanted: Option<PathBuf>,
+    /// The models and the folder they were loaded with.
+    loaded: Option<(Option<PathBuf>, guava::keypoints::Landmarkers)>,
+}
+
+impl KeypointModels {
+    /// The models for reconstructing `photo`: fitting needs them (their error is the job's),
+    /// otherwise they are optional (a warning, and `None`).
+    fn get(
+        &mut self,
+        photo: &Path,
+        tracked: &guava::reconstruct::Tracked,
+        stage: &Mutex<&'static str>,
+    ) -> Result<Option<&mut guava::keypoints::Landmarkers>, String> {
+        use guava::keypoints::Landmarkers;
+        if self
+            .loaded
+            .as_ref()
+            .is_none_or(|(dir, _)| *dir != self.wanted)
+        {
+            self.loaded = None;
+            *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the keypoint models";
+            let loaded = guava::onnx::OnnxRuntime::load().and_then(|rt| {
+                let models = Landmarkers::load(rt)?;
+                match &self.wanted {
+                    Some(dir) => models.with_wholebody(rt, dir),
+                    None => Ok(models),
+                }
+            });
+            match loaded.map_err(|e| e.to_string()) {
+                Ok(m) => self.loaded = Some((self.wanted.clone(), m)),
+                Err(e) if matches!(tracked, guava::reconstruct::Tracked::Fit) => {
+                    return Err(format!(
+                        "{}: no tracking file beside it, and fitting needs the keypoint models: {e}",
+                        photo.display()
+                    ));
+                }
+                Err(e) => log::warn!("keypoint models unavailable ({e})"),
+            }
         }
-    });
-    let loaded = loaded.map_err(|e| e.to_string());
-    match loaded {
-        Ok(m) => Ok(Some(m)),
-        Err(e) if matches!(tracked, guava::reconstruct::Tracked::Fit) => Err(format!(
-            "{}: no tracking file beside it, and fitting needs the keypoint models: {e}",
-            photo.display()
-        )),
-        Err(e) => {
-            log::warn!("keypoint models unavailable ({e})");
-            Ok(None)
-        }
+        Ok(self.loaded.as_mut().map(|(_, m)| m))
     }
 }
 
@@ -1484,7 +1512,7 @@ fn guava_worker(
     networks: Option<&Mutex<GuavaModels>>,
     photo: &Path,
     tracked: guava::reconstruct::Tracked,
-    dwpose: Option<&Path>,
+    keypoints: &mut KeypointModels,
     stage: &Mutex<&'static str>,
     cancel: &AtomicBool,
 ) -> Result<Loaded, String> {
@@ -1503,7 +1531,7 @@ fn guava_worker(
         None
     } else {
         // reconstruct_guava_file says what is missing if the photo needs its mask.
-        keypoint_models(photo, &tracked, dwpose, stage)?
+        keypoints.get(photo, &tracked, stage)?
     };
     let mut models = networks.lock().unwrap_or_else(|e| e.into_inner());
     let uv = uv_map(body, models.dims.uv as u32);
@@ -1513,7 +1541,7 @@ fn guava_worker(
         &uv,
         photo,
         tracked,
-        landmarkers.as_mut(),
+        landmarkers.as_deref_mut(),
         &mut progress(stage, cancel),
     )
     .map_err(|e| e.to_string())?;
@@ -1523,7 +1551,7 @@ fn guava_worker(
         models.source,
         r.fit
             .as_ref()
-            .map(|f| fit_summary(f, landmarkers.as_ref()))
+            .map(|f| fit_summary(f, landmarkers.as_deref()))
             .unwrap_or_default(),
         r.observed_texels,
         r.texels,

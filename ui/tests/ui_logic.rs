@@ -178,22 +178,22 @@ fn wait_until(h: &mut Harness<'static, GuavaApp>, done: impl Fn(&GuavaApp) -> bo
     }
 }
 
-/// Opens the demo portrait (copied into `dir` without its tracking, so it is fitted) and waits
-/// for its avatar; returns the avatar's label.
-fn reconstruct_demo_portrait(h: &mut Harness<'static, GuavaApp>, dir: &std::path::Path) -> String {
-    let portrait = dir.join("portrait.png");
+/// Opens the demo portrait (copied into `dir` as `name` without its tracking, so it is fitted)
+/// and waits for its avatar; returns the avatar's label.
+fn reconstruct_demo_portrait(
+    h: &mut Harness<'static, GuavaApp>,
+    dir: &std::path::Path,
+    name: &str,
+) -> String {
+    let portrait = dir.join(name);
     let shipped = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/demo_portrait.png");
     std::fs::copy(shipped, &portrait).expect("copy");
     h.state_mut().open(portrait);
     wait_until(h, |app| {
-        app.avatar_info()
-            .is_some_and(|(l, _)| l.contains("portrait.png"))
+        app.avatar_info().is_some_and(|(l, _)| l.contains(name))
     });
-    h.state()
-        .avatar_info()
-        .expect("reconstructed")
-        .0
-        .to_string()
+    let (label, _) = h.state().avatar_info().expect("reconstructed");
+    label.to_string()
 }
 
 /// Steps the app until its status line mentions `needle`; returns the status line.
@@ -557,7 +557,7 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
         "{status}"
     );
     assert_eq!(h.state().avatar_info().map(|(_, n)| n), Some(count));
-    let label = reconstruct_demo_portrait(&mut h, &dir);
+    let label = reconstruct_demo_portrait(&mut h, &dir, "portrait.png");
     assert!(
         label.contains("pose and camera fitted to 11 keypoints of pose_landmark_full"),
         "{label}"
@@ -599,7 +599,7 @@ fn ehm_trackers_keypoint_models_place_the_fits_points() {
 
     let dir = std::env::temp_dir().join(format!("guava-ui-dwpose-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
-    let label = reconstruct_demo_portrait(&mut h, &dir);
+    let label = reconstruct_demo_portrait(&mut h, &dir, "portrait.png");
     assert!(
         label.contains("fitted to 11 keypoints of EHM-Tracker's DWPose"),
         "{label}"
@@ -610,5 +610,11 @@ fn ehm_trackers_keypoint_models_place_the_fits_points() {
     h.get_by_label("MediaPipe's keypoints").click();
     h.run();
     h.get_by_label("Keypoints: MediaPipe's models (shipped)");
+    // The models kept between photos are loaded again for the change.
+    let label = reconstruct_demo_portrait(&mut h, &dir, "again.png");
+    assert!(
+        label.contains("fitted to 11 keypoints of pose_landmark_full"),
+        "{label}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
