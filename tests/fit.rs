@@ -1103,6 +1103,33 @@ fn palm_detector_matches_mediapipe_on_the_drawn_wave() {
     assert!(off < 0.75 * palm, "{off} px, palm {palm} px");
 }
 
+/// A palm out of both arms' reach is someone else's: on the drawing of the waving body, with the
+/// pose model's arms moved to a quarter-size person in the photo's corner (wrists unsure), the
+/// palm detector still finds the drawn hands, and neither is taken as the subject's.
+#[test]
+fn palms_out_of_reach_are_not_the_subjects() {
+    let source =
+        guava::reconstruct::SourceImage::load(&data("tests/data/drawn_wave.png")).expect("drawing");
+    let mut models = Landmarkers::load(runtime()).expect("shipped models");
+    let mut pose = models.pose(&source).expect("runs");
+    for i in 11..23 {
+        pose.refined[i] *= 0.25;
+        if i >= 15 {
+            pose.landmarks[i][3] = -10.0;
+        }
+    }
+    let palms = models.palm.detect(&source).expect("runs");
+    assert!(
+        palms.len() >= 2,
+        "the drawn hands are still there: {palms:?}"
+    );
+    let mut hands = Vec::new();
+    models
+        .hands_from_palms(&source, &pose, &mut hands)
+        .expect("runs");
+    assert!(hands.is_empty(), "{hands:?}");
+}
+
 /// Hands from palms alone: on the drawing of the waving body, with the pose model's wrists made
 /// unsure (so it places no hand crop), the palm detector's crops must find both hands, on the
 /// sides of the nearer pose wrists, and their points must agree with MediaPipe's own hand

@@ -233,7 +233,8 @@ impl Landmarkers {
 
     /// Hands the pose model did not place (a wrist it was unsure of, a hand far from where it
     /// put it), found from the palm detector: each palm no found hand's crop covers is taken as
-    /// the hand of the side whose pose wrist is nearer, if that side has none yet.
+    /// the hand of the side whose pose wrist is nearer, if that side has none yet and its arm
+    /// reaches the palm ([`reaches`]; a palm out of both arms' reach is someone else's).
     pub fn hands_from_palms(
         &mut self,
         source: &SourceImage,
@@ -247,7 +248,7 @@ impl Landmarkers {
             }
             let side = [Side::Left, Side::Right]
                 .into_iter()
-                .filter(|&s| hands.iter().all(|h| h.side != s))
+                .filter(|&s| hands.iter().all(|h| h.side != s) && reaches(pose, s, palm.wrist))
                 .min_by(|&a, &b| {
                     let d = |s| wrist(s).distance(palm.wrist);
                     d(a).total_cmp(&d(b))
@@ -258,6 +259,26 @@ impl Landmarkers {
         }
         Ok(())
     }
+}
+
+/// A palm's wrist may lie this many arm lengths from the shoulder and still be that arm's hand.
+const REACH: f32 = 1.3;
+/// An arm (shoulder to wrist) is at least this many shoulder widths, however foreshortened.
+const ARM_PER_SHOULDER_WIDTH: f32 = 1.6;
+
+/// Whether the subject's `side` arm reaches `at`: within [`REACH`] arm lengths of its shoulder,
+/// the arm's length being its upper arm and forearm as the pose model places them, or
+/// [`ARM_PER_SHOULDER_WIDTH`] shoulder widths when that is more (an arm pointing at the camera).
+fn reaches(pose: &PoseKeypoints, side: Side, at: Vec2) -> bool {
+    let joints = match side {
+        Side::Left => [11, 13, 15],
+        Side::Right => [12, 14, 16],
+    };
+    let [shoulder, elbow, wrist] = joints.map(|i| pose.point(i).0);
+    let width = pose.point(11).0.distance(pose.point(12).0);
+    let arm =
+        (shoulder.distance(elbow) + elbow.distance(wrist)).max(ARM_PER_SHOULDER_WIDTH * width);
+    shoulder.distance(at) <= REACH * arm
 }
 
 fn sigmoid(x: f32) -> f32 {
