@@ -27,8 +27,13 @@ pub const WHOLEBODY_FILES: [&str; 2] = ["yolox_l.onnx", "dw-ll_ucoco_384.onnx"];
 const POINTS: usize = 133;
 const LEFT_HAND: usize = 91;
 const RIGHT_HAND: usize = 112;
+/// COCO's body wrists.
+const LEFT_WRIST: usize = 9;
+const RIGHT_WRIST: usize = 10;
 /// DWPose and EHM-Tracker take a point as seen from this score.
 const SEEN_SCORE: f32 = 0.3;
+/// Two hands whose points lie a mean of less than this many palm lengths apart are one.
+const COINCIDENT_PALMS: f32 = 0.5;
 
 pub struct Wholebody {
     person: PersonDetector,
@@ -134,9 +139,11 @@ impl WholebodyPoints {
     }
 
     /// Each hand whose 21 points' mean confidence reaches the seen threshold (0.5, a mean score
-    /// of about DWPose's 0.3), its presence that mean.
+    /// of about DWPose's 0.3), its presence that mean. DWPose sometimes puts both hands on one
+    /// (EHM-Tracker skips such frames): when the two coincide, their points a mean of less than
+    /// half a palm apart, only the side whose body wrist is nearer keeps it.
     pub fn hands(&self) -> Vec<HandLandmarks> {
-        [(Side::Left, LEFT_HAND), (Side::Right, RIGHT_HAND)]
+        let hands: Vec<HandLandmarks> = [(Side::Left, LEFT_HAND), (Side::Right, RIGHT_HAND)]
             .into_iter()
             .filter_map(|(side, first)| {
                 let (points, confidences): (Vec<Vec2>, Vec<f32>) = (first
@@ -151,13 +158,83 @@ impl WholebodyPoints {
                     presence,
                 })
             })
-            .collect()
+            .collect();
+        let [a, b] = &hands[..] else {
+            return hands;
+        };
+        let apart = a
+            .points
+            .iter()
+            .zip(&b.points)
+            .map(|(p, q)| p.distance(*q))
+            .sum::<f32>()
+            / HAND_POINTS.len() as f32;
+        // Wrist to the middle finger's knuckle.
+        let palm = |h: &HandLandmarks| h.points[0].distance(h.points[9]);
+        if apart >= COINCIDENT_PALMS * 0.5 * (palm(a) + palm(b)) {
+            return hands;
+        }
+        let from_wrist = |h: &HandLandmarks| {
+            let wrist = if h.side == Side::Left {
+                LEFT_WRIST
+            } else {
+                RIGHT_WRIST
+            };
+            h.points[0].distance(self.point(wrist).0)
+        };
+        let nearer = if from_wrist(a) <= from_wrist(b) { a } else { b };
+        vec![nearer.clone()]
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::keypoints::SimccCrop;
+
+    /// A whole-body answer with both wrists at `wrists`, one hand drawn at `left` and one at
+    /// `right` (a palm 10 px long), every point scored 0.9.
+    fn answer(wrists: [Vec2; 2], left: Vec2, right: Vec2) -> WholebodyPoints {
+        let mut points = vec![Vec2::ZERO; POINTS];
+        (points[LEFT_WRIST], points[RIGHT_WRIST]) = (wrists[0], wrists[1]);
+        for (first, at) in [(LEFT_HAND, left), (RIGHT_HAND, right)] {
+            for k in 0..HAND_POINTS.len() {
+                // Fingers fanned upwards from the wrist.
+                let (finger, joint) = (k.saturating_sub(1) / 4, (k + 3) % 4 + 1);
+                let offset = if k == 0 {
+                    Vec2::ZERO
+                } else {
+                    Vec2::new(finger as f32 * 5.0 - 10.0, -5.0 * joint as f32 - 5.0)
+                };
+                points[first + k] = at + offset;
+            }
+        }
+        WholebodyPoints {
+            people: Vec::new(),
+            found: SimccPoints {
+                crop: SimccCrop {
+                    centre: glam::DVec2::ZERO,
+                    scale: glam::DVec2::ONE,
+                },
+                points,
+                scores: vec![0.9; POINTS],
+            },
+        }
+    }
+
+    #[test]
+    fn one_hand_seen_twice_goes_to_the_nearer_wrist() {
+        let wrists = [Vec2::new(300.0, 400.0), Vec2::new(100.0, 400.0)];
+        // Two hands apart: both kept, each on its side.
+        let both = answer(wrists, Vec2::new(300.0, 390.0), Vec2::new(100.0, 390.0)).hands();
+        let sides: Vec<Side> = both.iter().map(|h| h.side).collect();
+        assert_eq!(sides, vec![Side::Left, Side::Right]);
+        // Both on the right wrist, 2 px apart: one hand, the right.
+        let one = answer(wrists, Vec2::new(102.0, 390.0), Vec2::new(100.0, 390.0)).hands();
+        assert_eq!(one.len(), 1);
+        assert_eq!(one[0].side, Side::Right);
+        assert_eq!(one[0].points[0], Vec2::new(100.5, 390.5));
+    }
 
     #[test]
     fn dwpose_seen_scores_map_onto_the_fit_threshold() {
