@@ -7,8 +7,8 @@ use glam::{DVec2, Vec2, Vec3};
 use guava::body::{BodyModel, PosedBody};
 use guava::fit::fit_detections;
 use guava::keypoints::{
-    COCO_FROM_MEDIAPIPE, Keypoint, Landmarkers, PersonDetector, SimccLandmarker, WHOLEBODY_FILES,
-    Wholebody,
+    COCO_FROM_MEDIAPIPE, Keypoint, Landmarkers, PersonDetector, Rgb8, SimccLandmarker,
+    WHOLEBODY_FILES, Wholebody,
 };
 use guava::onnx::OnnxRuntime;
 use guava::reconstruct::{SourceImage, SourceView};
@@ -85,7 +85,7 @@ fn max_abs(a: &[f64], b: &[f64]) -> f64 {
 fn person_boxes_match_ehm_trackers_python() {
     let mut detector =
         PersonDetector::load_from(runtime(), &models().join(WHOLEBODY_FILES[0])).expect("yolox");
-    let found = detector.detect(&portrait()).expect("runs");
+    let found = detector.detect(&Rgb8::from(&portrait())).expect("runs");
     let expected = fixture()["boxes"].as_array().expect("boxes").clone();
     assert_eq!(found.len(), expected.len(), "{found:?}");
     let off = found
@@ -110,7 +110,7 @@ fn person_boxes_match_ehm_trackers_python() {
 fn dwpose_crops_and_points_match_ehm_trackers_python() {
     let mut pose =
         SimccLandmarker::load_from(runtime(), &models().join(WHOLEBODY_FILES[1])).expect("dwpose");
-    let (source, fixture) = (portrait(), fixture());
+    let (photo, fixture) = (Rgb8::from(&portrait()), fixture());
     // The box of the person EHM-Tracker kept: the one its crop is centred on.
     let kept = floats(&fixture["largest_person"]["centre"]);
     let person = fixture["boxes"]
@@ -128,15 +128,15 @@ fn dwpose_crops_and_points_match_ehm_trackers_python() {
         .expect("the kept person's box is one of the boxes");
     for (case, corners) in [("largest_person", Some(person)), ("whole_photo", None)] {
         let expected = &fixture[case];
-        let crop = pose.crop(&source, corners);
+        let crop = pose.crop(&photo, corners);
         let (centre, scale) = (floats(&expected["centre"]), floats(&expected["scale"]));
         let crop_off = max_abs(
             &[crop.centre.x, crop.centre.y, crop.scale.x, crop.scale.y],
             &[centre[0], centre[1], scale[0], scale[1]],
         );
-        let input = blocks(&pose.input(&source, crop), 288, 384);
+        let input = blocks(&pose.input(&photo, crop), 288, 384);
         let input_off = max_abs(&input, &floats(&expected["input_blocks"]));
-        let found = pose.detect(&source, corners).expect("runs");
+        let found = pose.detect(&photo, corners).expect("runs");
         let want = points(&expected["points"]);
         let scores = floats(&expected["scores"]);
         let bin = crop.scale.x as f32 / 288.0 / 2.0;

@@ -28,6 +28,7 @@ pub use face::{
 pub use face_detector::{FACE_DETECTOR_INPUT, FACE_DETECTOR_MODEL_PATH, FaceDetector};
 pub use hand::{HAND_INPUT, HAND_MODEL_PATH, HAND_POINTS, HandLandmarker, HandLandmarks, Side};
 pub use iris::{IRIS_INPUT, IRIS_MODEL_PATH, Iris, IrisLandmarker};
+pub use model::Rgb8;
 pub use palm::{PALM_INPUT, PALM_MODEL_PATH, PalmDetection, PalmDetector};
 pub use pose::{
     COCO_FROM_MEDIAPIPE, POSE_INPUT, POSE_MODEL_PATH, PoseKeypoints, PoseLandmarker,

@@ -125,12 +125,23 @@ impl NchwModel {
     }
 }
 
-/// The source's RGB as 8-bit values, as OpenCV holds a photo (the source was made from 8-bit
-/// pixels, so this gives them back).
-pub(super) fn rgb8(source: &SourceImage) -> Vec<u8> {
-    source
-        .rgb
-        .iter()
-        .map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
-        .collect()
+/// A source image as 8-bit RGB, as OpenCV holds a photo: what EHM-Tracker's models are prepared
+/// from (the source was made from 8-bit pixels, so this gives them back). Made once per photo.
+pub struct Rgb8 {
+    pub side: usize,
+    /// `rgb[3·i + c]`, row-major.
+    pub rgb: Vec<u8>,
+}
+
+impl From<&SourceImage> for Rgb8 {
+    fn from(source: &SourceImage) -> Self {
+        Self {
+            side: source.size as usize,
+            rgb: source
+                .rgb
+                .iter()
+                .map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
+                .collect(),
+        }
+    }
 }

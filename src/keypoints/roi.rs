@@ -112,10 +112,7 @@ impl Roi {
             .chain(["left_ear", "right_ear"].map(find))
             .flatten()
             .collect();
-        let (lo, hi) = points.iter().fold(
-            (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-        );
+        let (lo, hi) = bounds(points.iter().copied());
         let extent = (hi - lo).max_element();
         // The subject's right eye is on the image's left: right → left runs along +x upright.
         let across = left - right;
@@ -159,12 +156,7 @@ impl Roi {
     /// times `margin`.
     fn around(points: &[Vec2], angle: f32, margin: f32) -> Self {
         let to_crop = Vec2::from_angle(-angle);
-        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
-        for &p in points {
-            let q = to_crop.rotate(p);
-            lo = lo.min(q);
-            hi = hi.max(q);
-        }
+        let (lo, hi) = bounds(points.iter().map(|&p| to_crop.rotate(p)));
         let extent = hi - lo;
         Self {
             centre: Vec2::from_angle(angle).rotate(0.5 * (lo + hi)),
@@ -236,6 +228,14 @@ impl Roi {
             angle: up.x.atan2(-up.y),
         }
     }
+}
+
+/// The corners of the axis-aligned box around `points` (infinite, inside out, for none).
+pub(super) fn bounds(points: impl IntoIterator<Item = Vec2>) -> (Vec2, Vec2) {
+    points.into_iter().fold(
+        (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(p), hi.max(p)),
+    )
 }
 
 #[cfg(test)]

@@ -10,9 +10,8 @@ use std::path::Path;
 
 use glam::{DVec2, Vec2};
 
-use super::model::{NchwModel, rgb8};
+use super::model::{NchwModel, Rgb8};
 use crate::onnx::{OnnxError, OnnxRuntime};
-use crate::reconstruct::SourceImage;
 
 const PADDING: f64 = 1.25;
 const MEAN: [f32; 3] = [123.675, 116.28, 103.53];
@@ -52,8 +51,8 @@ impl SimccLandmarker {
     }
 
     /// The crop for a box (left, top, right, bottom), or for the whole photo without one.
-    pub fn crop(&self, source: &SourceImage, corners: Option<[f32; 4]>) -> SimccCrop {
-        let side = source.size as f32;
+    pub fn crop(&self, photo: &Rgb8, corners: Option<[f32; 4]>) -> SimccCrop {
+        let side = photo.side as f32;
         let [x0, y0, x1, y1] = corners.unwrap_or([0.0, 0.0, side, side]).map(f64::from);
         let centre = DVec2::new(x0 + x1, y0 + y1) * 0.5;
         let (w, h) = ((x1 - x0) * PADDING, (y1 - y0) * PADDING);
@@ -70,10 +69,9 @@ impl SimccLandmarker {
     /// to the bit (checked against it): the map from `onnxpose.py`'s three points (float32),
     /// each sample placed at 1/32 pixel by its 10-bit fixed-point sums, 4 exact bilinear
     /// weights, black outside the photo.
-    pub fn input(&self, source: &SourceImage, crop: SimccCrop) -> Vec<f32> {
+    pub fn input(&self, photo: &Rgb8, crop: SimccCrop) -> Vec<f32> {
         let (w, h) = (self.model.width, self.model.height);
-        let side = source.size as usize;
-        let rgb = rgb8(source);
+        let (side, rgb) = (photo.side, &photo.rgb);
         let map = InverseMap::of(crop, w, h);
         let mut planes = vec![0.0; 3 * w * h];
         for y in 0..h {
@@ -102,11 +100,11 @@ impl SimccLandmarker {
     /// The keypoints in the crop of a box (left, top, right, bottom), or of the whole photo.
     pub fn detect(
         &mut self,
-        source: &SourceImage,
+        photo: &Rgb8,
         corners: Option<[f32; 4]>,
     ) -> Result<SimccPoints, OnnxError> {
-        let crop = self.crop(source, corners);
-        let outputs = self.model.run(self.input(source, crop))?;
+        let crop = self.crop(photo, corners);
+        let outputs = self.model.run(self.input(photo, crop))?;
         let (w, h) = (self.model.width, self.model.height);
         let (x, y) = (&outputs[0], &outputs[1]);
         let (bins_x, bins_y) = (

@@ -14,6 +14,8 @@ use std::path::Path;
 use glam::Vec2;
 
 use super::hand::{HAND_POINTS, HandLandmarks, Side};
+use super::model::Rgb8;
+use super::roi::bounds;
 use super::simcc::{SimccLandmarker, SimccPoints};
 use super::yolox::{PersonBox, PersonDetector};
 use super::{COCO_FROM_MEDIAPIPE, Keypoint, Roi, check_folder};
@@ -54,10 +56,11 @@ impl Wholebody {
     /// The people YOLOX finds and the points of the one whose points span the largest box (of
     /// the whole photo when it finds nobody).
     pub fn detect(&mut self, source: &SourceImage) -> Result<WholebodyPoints, OnnxError> {
-        let people = self.person.detect(source)?;
+        let photo = Rgb8::from(source);
+        let people = self.person.detect(&photo)?;
         let mut best: Option<(f32, SimccPoints)> = None;
         for person in people.iter().map(|p| Some(p.corners)) {
-            let found = self.pose.detect(source, person)?;
+            let found = self.pose.detect(&photo, person)?;
             let area = spanned_area(&found.points);
             if best.as_ref().is_none_or(|(a, _)| area > *a) {
                 best = Some((area, found));
@@ -65,7 +68,7 @@ impl Wholebody {
         }
         let found = match best {
             Some((_, found)) => found,
-            None => self.pose.detect(source, None)?,
+            None => self.pose.detect(&photo, None)?,
         };
         if found.points.len() != POINTS {
             return Err(OnnxError::Run {
@@ -82,10 +85,7 @@ impl Wholebody {
 
 /// `DWposeDetector.get_max_area_bbox_index`: the area of the box around all of a person's points.
 fn spanned_area(points: &[Vec2]) -> f32 {
-    let (lo, hi) = points.iter().fold(
-        (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
-        |(lo, hi), &p| (lo.min(p), hi.max(p)),
-    );
+    let (lo, hi) = bounds(points.iter().copied());
     let size = hi - lo;
     size.x * size.y
 }

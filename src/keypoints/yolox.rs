@@ -7,9 +7,8 @@
 
 use std::path::Path;
 
-use super::model::{NchwModel, rgb8};
+use super::model::{NchwModel, Rgb8};
 use crate::onnx::{OnnxError, OnnxRuntime};
-use crate::reconstruct::SourceImage;
 
 const STRIDES: [usize; 3] = [8, 16, 32];
 const ROW: usize = 85;
@@ -38,8 +37,8 @@ impl PersonDetector {
     }
 
     /// The people on the photo, best first.
-    pub fn detect(&mut self, source: &SourceImage) -> Result<Vec<PersonBox>, OnnxError> {
-        let (input, ratio) = self.letterbox(source);
+    pub fn detect(&mut self, photo: &Rgb8) -> Result<Vec<PersonBox>, OnnxError> {
+        let (input, ratio) = self.letterbox(photo);
         let outputs = self.model.run(input)?;
         let (w, h) = (self.model.width, self.model.height);
         let cells: usize = STRIDES.iter().map(|s| (w / s) * (h / s)).sum();
@@ -62,12 +61,11 @@ impl PersonDetector {
     /// pixels to the bit (checked against it): half-pixel centres; weights in 11-bit fixed
     /// point; columns past the edge clamped with their weight, rows past it only clamped; the
     /// vertical pass as its vector code rounds it.
-    fn letterbox(&self, source: &SourceImage) -> (Vec<f32>, f32) {
+    fn letterbox(&self, photo: &Rgb8) -> (Vec<f32>, f32) {
         let (w, h) = (self.model.width, self.model.height);
-        let side = source.size as usize;
+        let (side, rgb) = (photo.side, &photo.rgb);
         let ratio = (w as f32 / side as f32).min(h as f32 / side as f32);
         let inner = (side as f32 * ratio) as usize;
-        let rgb = rgb8(source);
         let mut planes = vec![PAD; 3 * w * h];
         // Source indices and 11-bit weights of output index d; `clamp_weight` zeroes the weight
         // past the edges (OpenCV does so along x, not y).

@@ -559,19 +559,21 @@ impl GuavaApp {
         );
     }
 
-    /// Checks EHM-Tracker's keypoint models folder by loading it on a worker thread; once it
-    /// loads, photos are fitted with its body and hand points.
+    /// Loads EHM-Tracker's keypoint models folder on a worker thread into the models photo jobs
+    /// use (so the next photo does not load them again); once it loads, photos are fitted with
+    /// its body and hand points.
     fn open_wholebody(&mut self, dir: PathBuf) {
-        let worker_dir = dir.clone();
-        self.spawn_job(dir, "loading EHM-Tracker's keypoint models", move |_, _| {
-            guava::onnx::OnnxRuntime::load()
-                .map_err(|e| e.to_string())
-                .and_then(|rt| {
-                    guava::keypoints::Wholebody::load_dir(rt, &worker_dir)
-                        .map_err(|e| e.to_string())
-                })
-                .map(|_| Loaded::Wholebody(worker_dir))
-        });
+        let (worker_dir, models) = (dir.clone(), self.keypoint_models.clone());
+        self.spawn_job(
+            dir,
+            "loading EHM-Tracker's keypoint models",
+            move |stage, _| {
+                let mut models = models.lock().unwrap_or_else(|e| e.into_inner());
+                models.wanted = Some(worker_dir.clone());
+                models.ensure(stage)?;
+                Ok(Loaded::Wholebody(worker_dir))
+            },
+        );
     }
 
     /// What a photo's reconstruction needs from the app (`None` without a body).
@@ -1410,17 +1412,48 @@ fn reconstruct_worker(
 }
 
 /// The keypoint models photo jobs use: loaded by the first job that needs them and kept for the
-/// next (MediaPipe's seven take ~0.4 s to load, EHM-Tracker's are hundreds of MB), loaded again
-/// when the user wants other ones.
+/// next (MediaPipe's seven take ~0.4 s to load, EHM-Tracker's are hundreds of MB); when the user
+/// picks other ones, only EHM-Tracker's are loaded or dropped.
 #[derive(Default)]
 struct KeypointModels {
     /// EHM-Tracker's folder the next job wants (`None`: MediaPipe's models alone).
     wanted: Option<PathBuf>,
-    /// The models and the folder they were loaded with.
-    loaded: Option<(Option<PathBuf>, guava::keypoints::Landmarkers)>,
+    loaded: Option<guava::keypoints::Landmarkers>,
+    /// The EHM-Tracker folder `loaded` holds the models of.
+    wholebody: Option<PathBuf>,
 }
 
 impl KeypointModels {
+    /// The models with EHM-Tracker's from `wanted`, loading what is not loaded yet.
+    fn ensure(
+        &mut self,
+        stage: &Mutex<&'static str>,
+    ) -> Result<&mut guava::keypoints::Landmarkers, String> {
+        use guava::keypoints::{Landmarkers, Wholebody};
+        let runtime = guava::onnx::OnnxRuntime::load().map_err(|e| e.to_string())?;
+        let loading = || {
+            *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the keypoint models";
+        };
+        if self.loaded.is_none() {
+            loading();
+            self.wholebody = None;
+            self.loaded = Some(Landmarkers::load(runtime).map_err(|e| e.to_string())?);
+        }
+        let models = self.loaded.as_mut().expect("loaded above");
+        if self.wholebody != self.wanted {
+            loading();
+            // Consistent if loading fails: no EHM-Tracker models, and none recorded.
+            models.wholebody = None;
+            self.wholebody = None;
+            if let Some(dir) = &self.wanted {
+                models.wholebody =
+                    Some(Wholebody::load_dir(runtime, dir).map_err(|e| e.to_string())?);
+            }
+            self.wholebody = self.wanted.clone();
+        }
+        Ok(models)
+    }
+
     /// The models for reconstructing `photo`: fitting needs them (their error is the job's),
     /// otherwise they are optional (a warning, and `None`).
     fn get(
@@ -1429,33 +1462,17 @@ impl KeypointModels {
         tracked: &guava::reconstruct::Tracked,
         stage: &Mutex<&'static str>,
     ) -> Result<Option<&mut guava::keypoints::Landmarkers>, String> {
-        use guava::keypoints::Landmarkers;
-        if self
-            .loaded
-            .as_ref()
-            .is_none_or(|(dir, _)| *dir != self.wanted)
-        {
-            self.loaded = None;
-            *stage.lock().unwrap_or_else(|e| e.into_inner()) = "loading the keypoint models";
-            let loaded = guava::onnx::OnnxRuntime::load().and_then(|rt| {
-                let models = Landmarkers::load(rt)?;
-                match &self.wanted {
-                    Some(dir) => models.with_wholebody(rt, dir),
-                    None => Ok(models),
-                }
-            });
-            match loaded.map_err(|e| e.to_string()) {
-                Ok(m) => self.loaded = Some((self.wanted.clone(), m)),
-                Err(e) if matches!(tracked, guava::reconstruct::Tracked::Fit) => {
-                    return Err(format!(
-                        "{}: no tracking file beside it, and fitting needs the keypoint models: {e}",
-                        photo.display()
-                    ));
-                }
-                Err(e) => log::warn!("keypoint models unavailable ({e})"),
+        match self.ensure(stage) {
+            Ok(_) => Ok(self.loaded.as_mut()),
+            Err(e) if matches!(tracked, guava::reconstruct::Tracked::Fit) => Err(format!(
+                "{}: no tracking file beside it, and fitting needs the keypoint models: {e}",
+                photo.display()
+            )),
+            Err(e) => {
+                log::warn!("keypoint models unavailable ({e})");
+                Ok(None)
             }
         }
-        Ok(self.loaded.as_mut().map(|(_, m)| m))
     }
 }
 
