@@ -115,7 +115,7 @@ enum Command {
         image: PathBuf,
         #[arg(long)]
         out: PathBuf,
-        /// Also write the photo (its 512² square) with the points found (green) and where the
+        /// Also write the photo (the square it was fitted in, at 512²) with the points found (green) and where the
         /// fitted body puts them (red), twice the size, as PNG.
         #[arg(long)]
         overlay: Option<PathBuf>,
@@ -319,6 +319,7 @@ fn synth_photo(out: &Path, yaw: f32) -> Result<()> {
     let view = SourceView {
         pose: guava::body::BodyPose::rest(&body),
         camera: synthetic::upper_body_camera(&body, yaw.to_radians()),
+        crop: None,
     };
     let image = synthetic::photo(&body, &view.pose, &view.camera, synthetic::banded_texture)?;
     guava::atomic_file::write_atomic(out, |w| {
@@ -534,11 +535,19 @@ fn fit(
     ehm: Option<&Path>,
 ) -> Result<()> {
     use guava::fit::{fit_detections, fit_ehm_detections};
-    use guava::reconstruct::SourceImage;
-    let source = SourceImage::load(image)?;
     let mut models = landmarkers(models)?;
     let t0 = std::time::Instant::now();
-    let found = models.detect(&source)?;
+    let read = guava::reconstruct::framing::SourcePhoto::read(
+        image,
+        None,
+        Some(&mut models),
+        true,
+        &mut |_| true,
+    )?;
+    let (source, found) = (
+        read.image,
+        read.detections.expect("a fitted photo's keypoints"),
+    );
     let t1 = std::time::Instant::now();
     let name = image.file_name().unwrap_or_default().to_string_lossy();
     let body_points = models.body_points();
@@ -554,8 +563,9 @@ fn fit(
     let (tracking, report) = match ehm {
         Some(path) => {
             let body = guava::body::EhmModel::load(path)?;
-            let (view, report) =
+            let (mut view, report) =
                 fit_ehm_detections(&body, &found, &mut models.face, source.size).map_err(failed)?;
+            view.crop = read.crop;
             (
                 view.to_tracking(&body, &fitted(&report, &body.name)),
                 report,
@@ -563,8 +573,9 @@ fn fit(
         }
         None => {
             let body = guava::body::BodyModel::default_body()?;
-            let (view, report) =
+            let (mut view, report) =
                 fit_detections(&body, &found, &mut models.face, source.size).map_err(failed)?;
+            view.crop = read.crop;
             (
                 view.to_tracking(&body, &fitted(&report, "default body")),
                 report,
@@ -573,8 +584,12 @@ fn fit(
     };
     let t2 = std::time::Instant::now();
     tracking.save(out)?;
+    let framed = match read.crop {
+        Some(c) => format!(", framed {}² at ({}, {})", c.side, c.left, c.top),
+        None => String::new(),
+    };
     println!(
-        "{}: person presence {:.2} → {}",
+        "{}: person presence {:.2}{framed} → {}",
         image.display(),
         found.pose.presence,
         out.display()

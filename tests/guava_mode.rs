@@ -129,6 +129,7 @@ fn view(model: &EhmModel) -> SourceView {
     SourceView {
         pose,
         camera: Camera::guava(w2c, 512, 24.0),
+        crop: None,
     }
 }
 
@@ -146,7 +147,7 @@ fn card(side: u32) -> image::RgbaImage {
 }
 
 fn photo(side: u32) -> SourceImage {
-    SourceImage::from_rgba_at(&card(side), true, "card.png", side).expect("image")
+    SourceImage::from_rgba_at(&card(side), None, true, "card.png", side).expect("image")
 }
 
 #[test]

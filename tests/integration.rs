@@ -10,6 +10,7 @@ mod cli;
 mod ehm;
 mod ehm_fit;
 mod fit;
+mod framing;
 mod guava_mode;
 mod guava_models;
 mod mesh_view;

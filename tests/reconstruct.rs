@@ -39,6 +39,7 @@ fn rest_photo() -> (SourceView, image::RgbaImage) {
     let view = SourceView {
         pose: BodyPose::rest(body),
         camera: upper_body_camera(body, 0.0),
+        crop: None,
     };
     let image = photo(body, &view.pose, &view.camera, banded_texture).expect("photo");
     (view, image)
@@ -176,6 +177,7 @@ fn reconstruction_re_renders_the_photo() {
     let view = SourceView {
         pose,
         camera: upper_body_camera(body, 0.0),
+        crop: None,
     };
     let image = photo(body, &view.pose, &view.camera, banded_texture).expect("photo");
     let (avatar, report) = reconstruct(&view, &image).expect("reconstruct");
@@ -211,6 +213,7 @@ fn hidden_texels_get_no_colour_from_the_occluder() {
     let view = SourceView {
         pose: BodyPose::rest(body),
         camera: upper_body_camera(body, std::f32::consts::FRAC_PI_2),
+        crop: None,
     };
     let image = photo(body, &view.pose, &view.camera, texture).expect("photo");
     let source = SourceImage::from_rgba(&image, true, "side.png").expect("image");
@@ -395,6 +398,7 @@ fn avatar_file_round_trips_bit_identically_and_names_bad_fields() {
     let view = SourceView {
         pose: BodyPose::rest(body),
         camera: upper_body_camera(body, 0.4),
+        crop: None,
     };
     let image = photo(body, &view.pose, &view.camera, banded_texture).expect("photo");
     let (mut avatar, _) = reconstruct(&view, &image).expect("reconstruct");

@@ -54,6 +54,7 @@ fn sample_tracking(frames: usize) -> Tracking {
                     [0.0, 0.0, 1.0, 22.0],
                 ],
                 invtanfov: 24.0,
+                crop: None,
             }),
         });
     }

@@ -45,7 +45,7 @@ pub fn guava(args: &GuavaBenchArgs) -> anyhow::Result<()> {
     let portrait =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png");
     let rgba = image::open(&portrait)?.to_rgba8();
-    let image = SourceImage::from_rgba_at(&rgba, false, "demo_portrait.png", d.image as u32)?;
+    let image = SourceImage::from_rgba_at(&rgba, None, false, "demo_portrait.png", d.image as u32)?;
     // GUAVA's tracker camera: 22 m away at invtanfov 24, the body upright in view.
     let w2c = Mat4::from_cols_array_2d(&[
         [1.0, 0.0, 0.0, 0.0],
@@ -56,6 +56,7 @@ pub fn guava(args: &GuavaBenchArgs) -> anyhow::Result<()> {
     let view = SourceView {
         pose: BodyPose::rest(&body),
         camera: Camera::guava(w2c, SOURCE_SIZE, 24.0),
+        crop: None,
     };
     println!(
         "GUAVA mode with {} ({}; {}² image, {}² features and UV map, {} channels), body {:?} \

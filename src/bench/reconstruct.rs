@@ -42,6 +42,7 @@ pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
     let view = SourceView {
         pose: BodyPose::rest(&body),
         camera: upper_body_camera(&body, 0.3),
+        crop: None,
     };
     let image = photo(&body, &view.pose, &view.camera, banded_texture)?;
     println!(

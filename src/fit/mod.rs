@@ -515,6 +515,7 @@ pub fn fit_ehm_detections(
         SourceView {
             pose,
             camera: view.camera,
+            crop: None,
         },
         report,
     ))
@@ -894,6 +895,7 @@ pub fn fit_keypoints(
         SourceView {
             pose: result.pose,
             camera: camera_for(result.camera, side),
+            crop: None,
         },
         report,
     ))

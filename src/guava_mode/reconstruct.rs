@@ -20,7 +20,8 @@ use crate::avatar::{Avatar, AvatarKind, LocalGaussians, UvGaussians};
 use crate::body::{EhmModel, Posable, PosedBody};
 use crate::camera::Camera;
 use crate::fit::{FitReport, fit_ehm_detections};
-use crate::keypoints::{Detections, Keypoint, Landmarkers};
+use crate::keypoints::{Keypoint, Landmarkers};
+use crate::reconstruct::framing::SourcePhoto;
 use crate::reconstruct::raster::rasterize;
 use crate::reconstruct::{
     ReconstructError, SOURCE_SIZE, SourceImage, SourceView, Stage, StageClock, Tracked, UvMap,
@@ -236,42 +237,16 @@ pub fn reconstruct_guava_file(
     progress: &mut dyn FnMut(Stage) -> bool,
 ) -> Result<(Avatar, GuavaReport, SourceView), ReconstructError> {
     let file = photo.display().to_string();
-    let (decoded, has_alpha) = SourceImage::decode(photo)?;
-    let mut image =
-        SourceImage::from_rgba_at(&decoded, has_alpha, &file, models.dims.image as u32)?;
-    let fitting = matches!(tracked, Tracked::Fit);
+    if matches!(tracked, Tracked::Fit) && landmarkers.is_none() {
+        return Err(ReconstructError::Image {
+            file,
+            problem: "has no tracking file, and fitting it needs the keypoint models, which did \
+                      not load"
+                .into(),
+        });
+    }
     let started = Instant::now();
-    let mut detections = None;
-    if fitting || image.mask.is_none() {
-        let keypoint_models = landmarkers.as_deref_mut().ok_or_else(|| {
-            let needs = if fitting {
-                "has no tracking file, and fitting it needs the keypoint models"
-            } else {
-                "has no alpha channel, and its person mask needs the pose model"
-            };
-            ReconstructError::Image {
-                file: file.clone(),
-                problem: format!("{needs}, which did not load"),
-            }
-        })?;
-        if !progress(Stage::Fit) {
-            return Err(ReconstructError::Cancelled);
-        }
-        let found = if fitting {
-            // The keypoint models see the photo at the source size, not the encoder's.
-            keypoint_models.detect(&SourceImage::from_rgba(&decoded, has_alpha, &file)?)
-        } else {
-            keypoint_models.pose(&image).map(Detections::pose_only)
-        };
-        detections = Some(found.map_err(|e| ReconstructError::Keypoints(e.to_string()))?);
-    }
-    if image.mask.is_none()
-        && let Some(d) = &detections
-    {
-        image.apply_mask(d.pose.mask_at(image.size as usize));
-    }
-    let mut fit = None;
-    let (view, identity) = match tracked {
+    let given = match tracked {
         Tracked::File(tracking) => {
             let name = tracking.display().to_string();
             let tracking = Tracking::load(tracking)?;
@@ -283,14 +258,47 @@ pub fn reconstruct_guava_file(
                 .ehm
                 .as_ref()
                 .map_or_else(Default::default, EhmIdentityRecord::to_identity);
-            (view, identity)
+            Some((view, identity))
         }
-        Tracked::Given(view) => (view, body.identity.clone()),
-        Tracked::Fit => {
-            let found = detections.as_ref().expect("detected above when fitting");
+        Tracked::Given(view) => Some((view, body.identity.clone())),
+        Tracked::Fit => None,
+    };
+    // The keypoint models see the photo at the source size, the encoder at its own.
+    let read = SourcePhoto::read(
+        photo,
+        given.as_ref().map(|(view, _)| view.crop),
+        landmarkers.as_deref_mut(),
+        false,
+        progress,
+    )?;
+    let size = models.dims.image as u32;
+    let mut image =
+        SourceImage::from_rgba_at(&read.pixels, read.crop, read.has_alpha, &file, size)?;
+    if image.mask.is_none() {
+        let found = read
+            .detections
+            .as_ref()
+            .ok_or_else(|| ReconstructError::Image {
+                file: file.clone(),
+                problem:
+                    "has no alpha channel, and its person mask needs the pose model, which did \
+                      not load"
+                        .into(),
+            })?;
+        image.apply_mask(found.pose.mask_at(image.size as usize));
+    }
+    let mut fit = None;
+    let (view, identity) = match given {
+        Some(given) => given,
+        None => {
+            let found = read
+                .detections
+                .as_ref()
+                .expect("a fitted photo's keypoints");
             let face = &mut landmarkers.expect("checked above").face;
-            let (view, report) = fit_ehm_detections(body, found, face, SOURCE_SIZE)
+            let (mut view, report) = fit_ehm_detections(body, found, face, SOURCE_SIZE)
                 .map_err(|e| fit_error(&file, e))?;
+            view.crop = read.crop;
             fit = Some(report);
             (view, body.identity.clone())
         }
@@ -307,11 +315,14 @@ pub fn reconstruct_guava_file(
         tracked.identity = identity;
         reconstruct_guava(models, &tracked, uv, &view, &image, &source, progress)?
     };
-    if detections.is_some() {
+    if read.detections.is_some() {
         report.timings.insert(0, (Stage::Fit, fit_time));
     }
     report.fit = fit;
-    report.keypoints = detections.map(|d| d.pose.keypoints).unwrap_or_default();
+    report.keypoints = read
+        .detections
+        .map(|d| d.pose.keypoints)
+        .unwrap_or_default();
     Ok((avatar, report, view))
 }
 

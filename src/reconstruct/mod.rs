@@ -11,6 +11,7 @@
 
 pub mod default_mode;
 pub mod fill;
+pub mod framing;
 pub mod raster;
 pub mod source;
 pub mod synthetic;
@@ -24,12 +25,12 @@ use crate::avatar::Avatar;
 use crate::body::{BodyModel, BodyPose, Posable, PoseError, PosedBody, TargetGroup};
 use crate::camera::Camera;
 use crate::fit::FitReport;
-use crate::keypoints::{Detections, Landmarkers};
+use crate::keypoints::Landmarkers;
 use crate::tracking::{
     BodyKind, EhmIdentityRecord, Frame, Retarget, TrackedCamera, Tracking, TrackingError, camera_at,
 };
 pub use default_mode::{DEFAULT_CHANNELS, DiscStyle};
-pub use source::{SOURCE_SIZE, SourceImage};
+pub use source::{Crop, SOURCE_SIZE, SourceImage};
 pub use uv_map::UvMap;
 
 /// The default reconstruction's UV map side: at 448² the Anny body has ~126k valid texels, which
@@ -118,11 +119,13 @@ pub struct Report {
     pub keypoints: Vec<crate::keypoints::Keypoint>,
 }
 
-/// The tracked source: pose and camera of the photo.
+/// The tracked source: pose and camera of the photo, and the square of the photo the camera sees.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SourceView {
     pub pose: BodyPose,
     pub camera: Camera,
+    /// `None`: the photo's centred square.
+    pub crop: Option<Crop>,
 }
 
 impl SourceView {
@@ -161,6 +164,7 @@ impl SourceView {
             camera: Some(TrackedCamera {
                 w2c: rows,
                 invtanfov: view.camera.invtanfov(),
+                crop: view.crop.map(Crop::to_array),
             }),
         });
         tracking
@@ -188,9 +192,19 @@ impl SourceView {
             })?;
         let mut pose = BodyPose::rest(body);
         Retarget::new(tracking, body).sample(tracking, 0.0, &mut pose);
+        // Validated on loading: the side is positive and every number within ±2²⁰.
+        let crop = tracking.frames[0]
+            .camera
+            .and_then(|c| c.crop)
+            .map(|[left, top, side]| Crop {
+                left: left as i32,
+                top: top as i32,
+                side: side as u32,
+            });
         Ok(Self {
             pose,
             camera: Camera::guava(w2c, SOURCE_SIZE, invtanfov),
+            crop,
         })
     }
 }
@@ -297,9 +311,11 @@ pub enum MaskSource {
 }
 
 /// Reads `photo`, gets its pose and camera (from a tracking file or by fitting keypoints), and
-/// runs [`reconstruct_default`] on `body`: what the CLI and the viewer's worker call. A photo
-/// without alpha is masked by the pose model's segmentation when `landmarkers` are given (else by
-/// the body's silhouette). Fitting needs `landmarkers`. Every error names the file.
+/// runs [`reconstruct_default`] on `body`: what the CLI and the viewer's worker call. A fitted
+/// photo is framed around the person ([`framing`]); a tracked one is read in its tracking's
+/// square. A photo without alpha is masked by the pose model's segmentation when `landmarkers`
+/// are given (else by the body's silhouette). Fitting needs `landmarkers`. Every error names the
+/// file.
 pub fn reconstruct_photo_file(
     body: &BodyModel,
     uv: &UvMap,
@@ -308,51 +324,51 @@ pub fn reconstruct_photo_file(
     mut landmarkers: Option<&mut Landmarkers>,
     progress: &mut dyn FnMut(Stage) -> bool,
 ) -> Result<(Avatar, Report, SourceView), ReconstructError> {
-    let mut image = SourceImage::load(photo)?;
     let file = photo.display().to_string();
-    // A given pose runs the pose model too, so the viewer can show its keypoints against the pose.
-    let needs_model = image.mask.is_none() || !matches!(tracked, Tracked::File(_));
     let started = Instant::now();
-    let mut keypoints = None;
-    if needs_model && let Some(models) = landmarkers.as_deref_mut() {
-        if !progress(Stage::Fit) {
-            return Err(ReconstructError::Cancelled);
+    // A given pose runs the pose model too, so the viewer can show its keypoints against the pose.
+    let points = !matches!(tracked, Tracked::File(_));
+    let given = match tracked {
+        Tracked::File(path) => {
+            let name = path.display().to_string();
+            Some(SourceView::from_tracking(
+                &Tracking::load(path)?,
+                body,
+                &name,
+            )?)
         }
-        let found = if matches!(tracked, Tracked::Fit) {
-            models.detect(&image)
-        } else {
-            // Only the mask is needed: the face model would find nothing the tracking lacks.
-            models.pose(&image).map(Detections::pose_only)
-        };
-        keypoints = Some(found.map_err(|e| ReconstructError::Keypoints(e.to_string()))?);
-    }
+        Tracked::Given(view) => Some(view),
+        Tracked::Fit => None,
+    };
+    let read = framing::SourcePhoto::read(
+        photo,
+        given.as_ref().map(|v| v.crop),
+        landmarkers.as_deref_mut(),
+        points,
+        progress,
+    )?;
+    let mut image = read.image;
     let mut mask = MaskSource::Alpha;
     if image.mask.is_none() {
-        if let Some(k) = &keypoints {
+        if let Some(k) = &read.detections {
             image.apply_mask(k.pose.mask_at(image.size as usize));
             mask = MaskSource::Segmentation;
         } else {
             mask = MaskSource::Silhouette;
         }
     }
-    let (view, fit) = match tracked {
-        Tracked::File(path) => {
-            let name = path.display().to_string();
-            (
-                SourceView::from_tracking(&Tracking::load(path)?, body, &name)?,
-                None,
-            )
-        }
-        Tracked::Given(view) => (view, None),
-        Tracked::Fit => {
-            let k = keypoints.as_ref().ok_or_else(|| {
-                ReconstructError::Keypoints(
-                    "fitting a photo needs the pose model, which did not load".into(),
-                )
-            })?;
+    let (view, fit) = match given {
+        Some(view) => (view, None),
+        None => {
+            let k = read
+                .detections
+                .as_ref()
+                .expect("a fitted photo's keypoints");
             let models = landmarkers.expect("the keypoints came from them");
-            let (view, report) = crate::fit::fit_detections(body, k, &mut models.face, image.size)
-                .map_err(|e| fit_error(&file, e))?;
+            let (mut view, report) =
+                crate::fit::fit_detections(body, k, &mut models.face, image.size)
+                    .map_err(|e| fit_error(&file, e))?;
+            view.crop = read.crop;
             (view, Some(report))
         }
     };
@@ -362,11 +378,14 @@ pub fn reconstruct_photo_file(
         .map_or_else(|| file.clone(), |n| n.to_string_lossy().into_owned());
     let (avatar, mut report) = reconstruct_default(body, uv, &view, image, &name, progress)?;
     report.mask = mask;
-    if keypoints.is_some() {
+    if read.detections.is_some() {
         report.timings.insert(0, (Stage::Fit, fit_time));
     }
     report.fit = fit;
-    report.keypoints = keypoints.map(|k| k.pose.keypoints).unwrap_or_default();
+    report.keypoints = read
+        .detections
+        .map(|k| k.pose.keypoints)
+        .unwrap_or_default();
     Ok((avatar, report, view))
 }
 

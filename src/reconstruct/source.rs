@@ -1,6 +1,7 @@
-//! The source photo as reconstruction sees it: the centred square crop the tracked camera
-//! describes, resized (antialiased) to the render size, RGB in [0, 1] multiplied by the person
-//! mask (black background, as `data_loader.py` does), plus the mask itself.
+//! The source photo as reconstruction sees it: the square of the photo the tracked camera
+//! describes ([`Crop`]; the centred square unless the tracking or the fit says otherwise),
+//! resized (antialiased) to the render size, RGB in [0, 1] multiplied by the person mask (black
+//! background, as `data_loader.py` does), plus the mask itself.
 
 use std::path::Path;
 
@@ -13,6 +14,62 @@ pub const SOURCE_SIZE: u32 = 512;
 /// Smaller crops carry too little to sample (a 512² map from fewer than 32² pixels is a blur).
 pub const MIN_SOURCE_SIDE: u32 = 32;
 
+/// The square of a photo the source camera sees, in the photo's pixels: its top-left corner and
+/// side. It may reach past the photo's edges; what lies outside is transparent black, as
+/// EHM-Tracker pads its crops (`cv2.warpAffine`'s constant border).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Crop {
+    pub left: i32,
+    pub top: i32,
+    pub side: u32,
+}
+
+impl Crop {
+    /// The largest square centred in a `width × height` photo (what a tracking file without a
+    /// crop describes).
+    pub fn centred(width: u32, height: u32) -> Self {
+        let side = width.min(height);
+        Self {
+            left: ((width - side) / 2) as i32,
+            top: ((height - side) / 2) as i32,
+            side,
+        }
+    }
+
+    /// The smallest square holding the whole photo, centred on it (padded along its shorter side).
+    pub fn padded(width: u32, height: u32) -> Self {
+        let side = width.max(height);
+        Self {
+            left: -(((side - width) / 2) as i32),
+            top: -(((side - height) / 2) as i32),
+            side,
+        }
+    }
+
+    /// EHM-Tracker's body crop around a person's box (`crop_image_by_bbox`, scale 1.1): a square
+    /// 1.1 times the box's longer side, centred on the box. `bounds` are left, top, right, bottom
+    /// in the photo's pixels.
+    pub fn around(bounds: [f32; 4]) -> Self {
+        let [l, t, r, b] = bounds;
+        let side = ((r - l).max(b - t) * 1.1).round().max(1.0);
+        Self {
+            left: ((l + r - side) / 2.0).round() as i32,
+            top: ((t + b - side) / 2.0).round() as i32,
+            side: side as u32,
+        }
+    }
+
+    /// Photo pixel coordinates of a point given in a `size`² image of this square.
+    pub fn to_photo(&self, p: glam::Vec2, size: f32) -> glam::Vec2 {
+        glam::Vec2::new(self.left as f32, self.top as f32) + p * (self.side as f32 / size)
+    }
+
+    /// `[left, top, side]`, as tracking files store it.
+    pub fn to_array(self) -> [i64; 3] {
+        [self.left.into(), self.top.into(), self.side.into()]
+    }
+}
+
 /// Interleaved RGB planes plus the person mask, `size`² pixels, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SourceImage {
@@ -24,9 +81,9 @@ pub struct SourceImage {
 }
 
 impl SourceImage {
-    /// Reads a PNG or JPEG; an alpha channel, when present, is the person mask.
+    /// Reads a PNG or JPEG's centred square; an alpha channel, when present, is the person mask.
     pub fn load(path: &Path) -> Result<Self, ReconstructError> {
-        Self::load_at(path, SOURCE_SIZE)
+        Self::load_at(path, None, SOURCE_SIZE)
     }
 
     /// Whether the photo at `path` has an alpha channel (its person mask), read from its header
@@ -45,10 +102,10 @@ impl SourceImage {
         Ok(decoder.color_type().has_alpha())
     }
 
-    /// [`Self::load`] at `size`².
-    pub fn load_at(path: &Path, size: u32) -> Result<Self, ReconstructError> {
+    /// [`Self::load`] of `crop` (`None`: the centred square) at `size`².
+    pub fn load_at(path: &Path, crop: Option<Crop>, size: u32) -> Result<Self, ReconstructError> {
         let (decoded, has_alpha) = Self::decode(path)?;
-        Self::from_rgba_at(&decoded, has_alpha, &path.display().to_string(), size)
+        Self::from_rgba_at(&decoded, crop, has_alpha, &path.display().to_string(), size)
     }
 
     /// The photo's pixels and whether it has an alpha channel, for making it at several sizes
@@ -69,29 +126,44 @@ impl SourceImage {
         use_alpha: bool,
         file: &str,
     ) -> Result<Self, ReconstructError> {
-        Self::from_rgba_at(image, use_alpha, file, SOURCE_SIZE)
+        Self::from_rgba_at(image, None, use_alpha, file, SOURCE_SIZE)
     }
 
-    /// [`Self::from_rgba`] at `size`² (GUAVA's encoder takes 518²).
+    /// [`Self::from_rgba`] of `crop` (`None`: the centred square) at `size`² (GUAVA's encoder
+    /// takes 518²).
     pub fn from_rgba_at(
         image: &RgbaImage,
+        crop: Option<Crop>,
         use_alpha: bool,
         file: &str,
         size: u32,
     ) -> Result<Self, ReconstructError> {
         let (w, h) = image.dimensions();
-        let side = w.min(h);
+        let fail = |problem: String| ReconstructError::Image {
+            file: file.into(),
+            problem,
+        };
+        let Crop { left, top, side } = crop.unwrap_or(Crop::centred(w, h));
         if side < MIN_SOURCE_SIDE {
-            return Err(ReconstructError::Image {
-                file: file.into(),
-                problem: format!(
-                    "{w}×{h} pixels: the centred square crop must be at least {MIN_SOURCE_SIDE} pixels"
-                ),
-            });
+            return Err(fail(format!(
+                "{w}×{h} pixels: the square crop ({side} pixels) must be at least \
+                 {MIN_SOURCE_SIDE} pixels"
+            )));
         }
-        let crop = imageops::crop_imm(image, (w - side) / 2, (h - side) / 2, side, side).to_image();
+        let (right, bottom) = (
+            i64::from(left) + i64::from(side),
+            i64::from(top) + i64::from(side),
+        );
+        if right <= 0 || bottom <= 0 || left >= w as i32 || top >= h as i32 {
+            return Err(fail(format!(
+                "{w}×{h} pixels: the square crop at ({left}, {top}) of side {side} lies outside the \
+                 photo (is the tracking file this photo's?)"
+            )));
+        }
+        let mut square = RgbaImage::new(side, side);
+        imageops::replace(&mut square, image, -i64::from(left), -i64::from(top));
         // Triangle = bilinear with its support widened by the scale: torchvision's antialias.
-        let resized = imageops::resize(&crop, size, size, imageops::FilterType::Triangle);
+        let resized = imageops::resize(&square, size, size, imageops::FilterType::Triangle);
         let n = (size * size) as usize;
         let mut rgb = Vec::with_capacity(3 * n);
         let mut mask = Vec::with_capacity(n);

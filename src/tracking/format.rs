@@ -149,7 +149,14 @@ pub struct Frame {
 pub struct TrackedCamera {
     pub w2c: [[f32; 4]; 3],
     pub invtanfov: f32,
+    /// The square of the source photo this camera's image is, `[left, top, side]` in the photo's
+    /// pixels (it may reach past the photo's edges); absent: the photo's centred square.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crop: Option<[i64; 3]>,
 }
+
+/// Largest accepted photo coordinate of a crop, in pixels.
+const MAX_CROP: i64 = 1 << 20;
 
 #[derive(Debug, thiserror::Error)]
 #[error("{file}: {}{field}: {problem}", frame.map(|f| format!("frame {f}: ")).unwrap_or_default())]
@@ -405,7 +412,19 @@ fn check_camera(camera: &TrackedCamera) -> Result<(), (String, String)> {
         ));
     }
     check_vector(&[m[0][3], m[1][3], m[2][3]], MAX_TRANSLATION)
-        .map_err(|p| fail("w2c translation", p))
+        .map_err(|p| fail("w2c translation", p))?;
+    if let Some([left, top, side]) = camera.crop
+        && !(side > 0 && side <= MAX_CROP && left.abs() <= MAX_CROP && top.abs() <= MAX_CROP)
+    {
+        return Err(fail(
+            "crop",
+            format!(
+                "[{left}, {top}, {side}] is not a square [left, top, side] with a side in \
+                 (0, {MAX_CROP}] and corners within ±{MAX_CROP} pixels"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

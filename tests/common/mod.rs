@@ -127,6 +127,7 @@ pub fn ehm_rest_tracking(
                 [0.0, 0.0, -1.0, 22.0],
             ],
             invtanfov: 24.0,
+            crop: None,
         }),
     });
     t

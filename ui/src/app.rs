@@ -653,6 +653,7 @@ impl GuavaApp {
         let view = SourceView {
             pose: guava::body::BodyPose::rest(model.as_ref()),
             camera: synthetic::upper_body_camera(&model, 0.35),
+            crop: None,
         };
         self.spawn_job(
             SYNTHETIC_PHOTO.into(),
@@ -678,7 +679,7 @@ impl GuavaApp {
                 )
                 .map(|(a, r)| {
                     let camera = (view.camera.view_from_world, view.camera.invtanfov());
-                    let summary = Some(default_summary(&r, None));
+                    let summary = Some(default_summary(&r, None, None));
                     Loaded::Avatar(Box::new(a), summary, Preview::None, Some(camera))
                 })
                 .map_err(|e| e.to_string())
@@ -746,6 +747,7 @@ impl GuavaApp {
         let view = guava::reconstruct::SourceView {
             pose: body.pose.clone(),
             camera: source.view.camera,
+            crop: source.view.crop,
         };
         match action {
             FitAction::StartEditing => {
@@ -1394,6 +1396,7 @@ fn reconstruct_worker(
     )
     .map_err(|e| e.to_string())?;
     let camera = (view.camera.view_from_world, view.camera.invtanfov());
+    let summary = default_summary(&report, model.as_deref(), view.crop);
     let preview = SourcePreview::new(
         body,
         &body.landmarks,
@@ -1405,7 +1408,7 @@ fn reconstruct_worker(
     .map_or(Preview::None, |p| Preview::Fit(Box::new(p)));
     Ok(Loaded::Avatar(
         Box::new(avatar),
-        Some(default_summary(&report, model.as_deref())),
+        Some(summary),
         preview,
         Some(camera),
     ))
@@ -1480,12 +1483,13 @@ impl KeypointModels {
 fn default_summary(
     r: &guava::reconstruct::Report,
     models: Option<&guava::keypoints::Landmarkers>,
+    crop: Option<guava::reconstruct::Crop>,
 ) -> String {
     let ms: f64 = r.timings.iter().map(|(_, d)| d.as_secs_f64() * 1e3).sum();
     let mut summary = r
         .fit
         .as_ref()
-        .map(|f| fit_summary(f, models))
+        .map(|f| fit_summary(f, models, crop))
         .unwrap_or_default();
     summary.push_str(&format!(
         "{} of {} texels seen, {} mirrored, rest inpainted; {ms:.0} ms",
@@ -1494,12 +1498,20 @@ fn default_summary(
     summary
 }
 
-/// How the source view was fitted, for the avatar's label (ends with "; ").
+/// How the source view was fitted, and where in the photo when it was framed around the
+/// person (`crop`), for the avatar's label (ends with "; ").
 fn fit_summary(
     f: &guava::fit::FitReport,
     models: Option<&guava::keypoints::Landmarkers>,
+    crop: Option<guava::reconstruct::Crop>,
 ) -> String {
     let mut summary = String::new();
+    if let Some(c) = crop {
+        summary.push_str(&format!(
+            "framed around the person ({}² at {}, {} of the photo); ",
+            c.side, c.left, c.top
+        ));
+    }
     {
         summary.push_str(&format!(
             "pose and camera fitted to {} keypoints{} ({:.1} px RMS)",
@@ -1568,7 +1580,7 @@ fn guava_worker(
         models.source,
         r.fit
             .as_ref()
-            .map(|f| fit_summary(f, landmarkers.as_deref()))
+            .map(|f| fit_summary(f, landmarkers.as_deref(), view.crop))
             .unwrap_or_default(),
         r.observed_texels,
         r.texels,
@@ -1578,7 +1590,8 @@ fn guava_worker(
     let preview = match &r.fit {
         Some(fit) => SourcePreview::new(body, &fit.surface, photo, &r.keypoints, Some(fit), view)
             .map_or(Preview::None, |p| Preview::Fit(Box::new(p))),
-        None => TrackedPhoto::new(photo, &r.projected).map_or(Preview::None, Preview::Tracked),
+        None => TrackedPhoto::new(photo, view.crop, &r.projected)
+            .map_or(Preview::None, Preview::Tracked),
     };
     Ok(Loaded::Avatar(
         Box::new(avatar),

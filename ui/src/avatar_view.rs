@@ -10,7 +10,7 @@ use guava::body::{Landmark, Posable, PosedBody};
 use guava::fit::{BodyPoint, FitReport};
 use guava::gaussians::GaussianCloud;
 use guava::keypoints::Keypoint;
-use guava::reconstruct::{SourceImage, SourceView};
+use guava::reconstruct::{Crop, SOURCE_SIZE, SourceImage, SourceView};
 
 use crate::body_panel::BodyState;
 use crate::viewport::SceneRef;
@@ -91,15 +91,15 @@ pub enum Preview {
     Tracked(TrackedPhoto),
 }
 
-/// A source photo (its square crop at the reconstruction's size) as an egui image.
+/// A source photo (the square its camera sees, at the reconstruction's size) as an egui image.
 struct Photo {
     image: egui::ColorImage,
     texture: Option<egui::TextureHandle>,
 }
 
 impl Photo {
-    fn load(photo: &Path) -> Option<Self> {
-        let source = SourceImage::load(photo).ok()?;
+    fn load(photo: &Path, crop: Option<Crop>) -> Option<Self> {
+        let source = SourceImage::load_at(photo, crop, SOURCE_SIZE).ok()?;
         let size = source.size as usize;
         let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
         let pixels = source
@@ -139,9 +139,9 @@ const TRACKED_POINT_STRIDE: usize = 8;
 
 impl TrackedPhoto {
     /// `None` when the photo cannot be read again.
-    pub fn new(photo: &Path, projected: &[Vec2]) -> Option<Self> {
+    pub fn new(photo: &Path, crop: Option<Crop>, projected: &[Vec2]) -> Option<Self> {
         Some(Self {
-            photo: Photo::load(photo)?,
+            photo: Photo::load(photo, crop)?,
             points: projected
                 .iter()
                 .step_by(TRACKED_POINT_STRIDE)
@@ -232,7 +232,7 @@ impl SourcePreview {
         });
         let detail = face.chain(hands).chain(irises).collect();
         let mut preview = Self {
-            photo_image: Photo::load(photo)?,
+            photo_image: Photo::load(photo, view.crop)?,
             photo: photo.to_path_buf(),
             view,
             keypoints,

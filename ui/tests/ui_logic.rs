@@ -335,6 +335,7 @@ fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
     let view = SourceView {
         pose: guava::body::BodyPose::rest(&body),
         camera: synthetic::upper_body_camera(&body, 0.2),
+        crop: None,
     };
     let photo = dir.join("person.png");
     synthetic::photo(&body, &view.pose, &view.camera, synthetic::banded_texture)
@@ -472,6 +473,7 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
                 [0.0, 0.0, -1.0, 22.0],
             ],
             invtanfov: 24.0,
+            crop: None,
         }),
     });
     tracking.save(&dir.join("card.json")).expect("tracking");

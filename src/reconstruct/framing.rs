@@ -1,0 +1,330 @@
+//! Which square of the photo reconstruction sees. A tracked view says (its crop, or the centred
+//! square); a photo fitted here is framed around the person: the centred square is kept when it
+//! holds the whole person at a useful size, so a photo already framed for GUAVA stays as it is;
+//! otherwise the square is EHM-Tracker's body crop around the person ([`Crop::around`]), padded
+//! where it passes the photo's edges. The person is the photo's alpha, else the pose model's mask.
+
+use std::path::Path;
+
+use glam::Vec2;
+use image::RgbaImage;
+
+use super::source::{Crop, SOURCE_SIZE, SourceImage};
+use super::{ReconstructError, Stage};
+use crate::fit::MIN_PRESENCE;
+use crate::keypoints::{Detections, Landmarkers};
+
+/// The share of the person the centred square may leave out before the photo is reframed (a
+/// mask's stray edge pixels stay under it).
+const MAX_CUT: f32 = 0.01;
+/// Below this share of the centred square's side, the person's square is framed instead: the
+/// person would get under half the source's pixels across.
+const MIN_SHARE: f32 = 0.5;
+/// A mask value at or above this is the person.
+const PERSON: f32 = 0.5;
+
+/// A person mask over a rectangle of the photo: `width × height` cells, cell `(i, j)` covering
+/// `origin + [i, i + 1]·cell × [j, j + 1]·cell` in the photo's pixels.
+pub struct PersonMask {
+    values: Vec<f32>,
+    width: usize,
+    origin: Vec2,
+    cell: f32,
+}
+
+impl PersonMask {
+    /// The mask of a square source image (`values`, row-major, a square count) of `crop`.
+    pub fn over(crop: Crop, values: Vec<f32>) -> Self {
+        let width = (values.len() as f64).sqrt().round() as usize;
+        Self {
+            cell: crop.side as f32 / width as f32,
+            origin: Vec2::new(crop.left as f32, crop.top as f32),
+            values,
+            width,
+        }
+    }
+
+    /// The photo's alpha channel, pixel for pixel.
+    pub fn alpha(photo: &RgbaImage) -> Self {
+        Self {
+            values: photo.pixels().map(|p| f32::from(p[3]) / 255.0).collect(),
+            width: photo.width() as usize,
+            origin: Vec2::ZERO,
+            cell: 1.0,
+        }
+    }
+
+    /// The centres of the person's cells that lie on a `width × height` photo.
+    fn person(&self, width: u32, height: u32) -> impl Iterator<Item = Vec2> + '_ {
+        let size = Vec2::new(width as f32, height as f32);
+        self.values
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| **v >= PERSON)
+            .map(|(k, _)| {
+                let cell = Vec2::new((k % self.width) as f32, (k / self.width) as f32);
+                self.origin + (cell + 0.5) * self.cell
+            })
+            .filter(move |p| p.cmpge(Vec2::ZERO).all() && p.cmplt(size).all())
+    }
+}
+
+/// The square to reconstruct a `width × height` photo's person from: `None` keeps the centred
+/// square (it holds all but [`MAX_CUT`] of the person, who spans at least [`MIN_SHARE`] of it),
+/// else EHM-Tracker's square around the person's box. `None` too when the mask has nobody.
+pub fn frame(mask: &PersonMask, width: u32, height: u32) -> Option<Crop> {
+    let centred = Crop::centred(width, height);
+    let (low, high) = (
+        Vec2::new(centred.left as f32, centred.top as f32),
+        Vec2::new(centred.left as f32, centred.top as f32) + centred.side as f32,
+    );
+    let (mut min, mut max) = (Vec2::MAX, Vec2::MIN);
+    let (mut all, mut inside) = (0usize, 0usize);
+    for p in mask.person(width, height) {
+        all += 1;
+        inside += usize::from(p.cmpge(low).all() && p.cmplt(high).all());
+        min = min.min(p - 0.5 * mask.cell);
+        max = max.max(p + 0.5 * mask.cell);
+    }
+    if all == 0 {
+        return None;
+    }
+    let around = Crop::around([min.x, min.y, max.x, max.y]);
+    let cut = (all - inside) as f32 > MAX_CUT * all as f32;
+    let small = (around.side as f32) < MIN_SHARE * centred.side as f32;
+    (cut || small).then_some(around)
+}
+
+/// Whether the person on a `size`² source of a `width × height` photo's centred square reaches
+/// one of the square's edges that the photo continues past (so part of them may be cut off).
+fn reaches_cut_edge(mask: &[f32], size: usize, width: u32, height: u32) -> bool {
+    let line = |cell: &dyn Fn(usize) -> usize| (0..size).any(|i| mask[cell(i)] >= PERSON);
+    let last = size - 1;
+    (width > height && (line(&|i| i * size) || line(&|i| i * size + last)))
+        || (height > width && (line(&|i| i) || line(&|i| last * size + i)))
+}
+
+/// The photo as reconstruction reads it: its pixels, the square the view sees at
+/// [`SOURCE_SIZE`], and what the keypoint models found there.
+pub struct SourcePhoto {
+    pub pixels: RgbaImage,
+    pub has_alpha: bool,
+    /// `None`: the centred square.
+    pub crop: Option<Crop>,
+    pub image: SourceImage,
+    pub detections: Option<Detections>,
+}
+
+impl SourcePhoto {
+    /// Reads `photo`. With `known` (a tracked view's crop) the square is that one, and the pose
+    /// model alone runs when `models` are given and the photo has no alpha (for the person
+    /// mask) or `points` asks (the points the viewer shows). Without, the photo is fitted:
+    /// `models` find the person, framed as [`frame`] says, and every keypoint model runs on the
+    /// chosen square. `progress` hears [`Stage::Fit`] before each model run.
+    pub fn read(
+        photo: &Path,
+        known: Option<Option<Crop>>,
+        models: Option<&mut Landmarkers>,
+        points: bool,
+        progress: &mut dyn FnMut(Stage) -> bool,
+    ) -> Result<Self, ReconstructError> {
+        let file = photo.display().to_string();
+        let (pixels, has_alpha) = SourceImage::decode(photo)?;
+        let read = |crop| SourceImage::from_rgba_at(&pixels, crop, has_alpha, &file, SOURCE_SIZE);
+        let (crop, image, detections) = match (known, models) {
+            (Some(crop), models) => {
+                let image = read(crop)?;
+                let detections = match models.filter(|_| points || !has_alpha) {
+                    Some(models) => {
+                        started(progress)?;
+                        let pose = models.pose(&image).map_err(keypoint_error)?;
+                        Some(Detections::pose_only(pose))
+                    }
+                    None => None,
+                };
+                (crop, image, detections)
+            }
+            (None, Some(models)) => {
+                let (crop, image, found) = Self::fit(&pixels, has_alpha, &file, models, progress)?;
+                (crop, image, Some(found))
+            }
+            (None, None) => {
+                return Err(ReconstructError::Keypoints(
+                    "fitting a photo needs the keypoint models, which did not load".into(),
+                ));
+            }
+        };
+        Ok(Self {
+            pixels,
+            has_alpha,
+            crop,
+            image,
+            detections,
+        })
+    }
+
+    /// Frames the person and detects every keypoint on the chosen square. The alpha frames a
+    /// photo that has one before any model runs; else the models' first look is the centred
+    /// square, then (only when the person reaches an edge the photo continues past) the pose
+    /// model on the whole photo, and the models again on the reframed square.
+    fn fit(
+        pixels: &RgbaImage,
+        has_alpha: bool,
+        file: &str,
+        models: &mut Landmarkers,
+        progress: &mut dyn FnMut(Stage) -> bool,
+    ) -> Result<(Option<Crop>, SourceImage, Detections), ReconstructError> {
+        let (width, height) = pixels.dimensions();
+        let read = |crop| SourceImage::from_rgba_at(pixels, crop, has_alpha, file, SOURCE_SIZE);
+        let crop = if has_alpha {
+            frame(&PersonMask::alpha(pixels), width, height)
+        } else {
+            let image = read(None)?;
+            let found = detect(models, &image, progress)?;
+            let size = SOURCE_SIZE as usize;
+            let mask = found.pose.mask_at(size);
+            // A person the centred square misses or cuts is looked for on the whole photo.
+            let whole = if width != height
+                && (found.pose.presence < MIN_PRESENCE
+                    || reaches_cut_edge(&mask, size, width, height))
+            {
+                let padded = Crop::padded(width, height);
+                started(progress)?;
+                let pose = models.pose(&read(Some(padded))?).map_err(keypoint_error)?;
+                (pose.presence >= MIN_PRESENCE)
+                    .then(|| PersonMask::over(padded, pose.mask_at(size)))
+            } else {
+                (found.pose.presence >= MIN_PRESENCE)
+                    .then(|| PersonMask::over(Crop::centred(width, height), mask))
+            };
+            match whole.and_then(|m| frame(&m, width, height)) {
+                None => return Ok((None, image, found)),
+                crop => crop,
+            }
+        };
+        let image = read(crop)?;
+        let found = detect(models, &image, progress)?;
+        Ok((crop, image, found))
+    }
+}
+
+/// Every keypoint model on `image`, once `progress` says go on.
+fn detect(
+    models: &mut Landmarkers,
+    image: &SourceImage,
+    progress: &mut dyn FnMut(Stage) -> bool,
+) -> Result<Detections, ReconstructError> {
+    started(progress)?;
+    models.detect(image).map_err(keypoint_error)
+}
+
+/// Asks `progress` whether to go on with the keypoint models.
+fn started(progress: &mut dyn FnMut(Stage) -> bool) -> Result<(), ReconstructError> {
+    if progress(Stage::Fit) {
+        Ok(())
+    } else {
+        Err(ReconstructError::Cancelled)
+    }
+}
+
+fn keypoint_error(e: impl std::fmt::Display) -> ReconstructError {
+    ReconstructError::Keypoints(e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A mask over a `width × height` photo with the person on `[l, r) × [t, b)`.
+    fn person(width: u32, height: u32, [l, t, r, b]: [u32; 4]) -> PersonMask {
+        let mut photo = RgbaImage::new(width, height);
+        for y in t..b {
+            for x in l..r {
+                photo.put_pixel(x, y, image::Rgba([0, 0, 0, 255]));
+            }
+        }
+        PersonMask::alpha(&photo)
+    }
+
+    #[test]
+    fn a_person_inside_the_centred_square_keeps_it() {
+        // Wide photo, person centred and filling most of the height.
+        assert_eq!(
+            frame(&person(400, 200, [150, 20, 250, 200]), 400, 200),
+            None
+        );
+        // Square photo the person fills, cut by its bottom edge as portraits are.
+        assert_eq!(frame(&person(300, 300, [40, 30, 260, 300]), 300, 300), None);
+        assert_eq!(frame(&person(300, 300, [0, 0, 0, 0]), 300, 300), None);
+    }
+
+    #[test]
+    fn a_person_the_centred_square_cuts_is_framed_as_ehm_tracker_frames_them() {
+        // Off-centre in a wide photo: box 100 wide, 180 tall → side 198 around its centre.
+        let crop = frame(&person(400, 200, [20, 20, 120, 200]), 400, 200).expect("reframed");
+        assert_eq!(
+            crop,
+            Crop {
+                left: -29,
+                top: 11,
+                side: 198
+            }
+        );
+        // Tall photo, head near the top: the centred square (its rows 100–300) cuts it.
+        let crop = frame(&person(200, 400, [30, 20, 170, 400]), 200, 400).expect("reframed");
+        assert_eq!((crop.side, crop.top), (418, 1));
+        // Just under 1 % outside stays; just over is reframed.
+        let edge = |cut: u32| person(400, 200, [100 - cut, 0, 300, 200]);
+        assert_eq!(frame(&edge(2), 400, 200), None, "2 of 202 columns: 0.99 %");
+        assert!(
+            frame(&edge(3), 400, 200).is_some(),
+            "3 of 203 columns: 1.5 %"
+        );
+    }
+
+    #[test]
+    fn a_small_person_is_framed_closer() {
+        let crop = frame(&person(1000, 1000, [450, 400, 550, 600]), 1000, 1000);
+        assert_eq!(
+            crop,
+            Some(Crop {
+                left: 390,
+                top: 390,
+                side: 220
+            })
+        );
+        // At half the square's side or more, the square stays.
+        assert_eq!(
+            frame(&person(1000, 1000, [300, 300, 700, 760]), 1000, 1000),
+            None
+        );
+    }
+
+    #[test]
+    fn a_source_mask_maps_onto_the_photo_through_its_crop() {
+        // A 4² mask of the padded square of a 200×400 photo (side 400, left −100): its cell
+        // (1, 0) covers photo x 0–100, y 0–100.
+        let mut values = vec![0.0; 16];
+        values[1] = 1.0;
+        let mask = PersonMask::over(Crop::padded(200, 400), values);
+        let cells: Vec<Vec2> = mask.person(200, 400).collect();
+        assert_eq!(cells, [Vec2::new(50.0, 50.0)]);
+        // Cells of the padding are not the person.
+        let mask = PersonMask::over(Crop::padded(200, 400), vec![1.0; 16]);
+        assert_eq!(mask.person(200, 400).count(), 8);
+    }
+
+    #[test]
+    fn only_edges_the_photo_continues_past_count_as_cut() {
+        let size = 8;
+        let mut left = vec![0.0; size * size];
+        left[3 * size] = 1.0;
+        assert!(reaches_cut_edge(&left, size, 300, 200));
+        assert!(!reaches_cut_edge(&left, size, 200, 300));
+        assert!(!reaches_cut_edge(&left, size, 200, 200));
+        let mut bottom = vec![0.0; size * size];
+        bottom[size * size - 3] = 1.0;
+        assert!(reaches_cut_edge(&bottom, size, 200, 300));
+        assert!(!reaches_cut_edge(&bottom, size, 300, 200));
+    }
+}

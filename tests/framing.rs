@@ -1,0 +1,201 @@
+//! Framing a fitted photo around the person (`guava::reconstruct::framing`): the demo portrait
+//! placed where the centred square cuts it (left of a wide photo, top of a tall one) or leaves it
+//! small (the middle of a large one) is found, framed, and fitted where the portrait alone puts
+//! it; the frame travels with the view into tracking files and back.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec2;
+use guava::body::BodyModel;
+use guava::keypoints::Landmarkers;
+use guava::onnx::OnnxRuntime;
+use guava::reconstruct::{
+    Crop, DEFAULT_UV_SIZE, SOURCE_SIZE, SourceView, Tracked, UvMap, reconstruct_photo_file,
+};
+use guava::tracking::Tracking;
+use image::{Rgb, RgbImage, imageops};
+
+fn temp_dir() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("guava-framing-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+/// The demo portrait pasted at `at` on a `size` canvas of its background's grey, as a PNG.
+fn placed(dir: &Path, name: &str, size: [u32; 2], at: [i64; 2]) -> PathBuf {
+    let portrait = image::open("assets/demo_portrait.png")
+        .expect("portrait")
+        .to_rgb8();
+    let mut photo = RgbImage::from_pixel(size[0], size[1], Rgb([150, 150, 160]));
+    imageops::replace(&mut photo, &portrait, at[0], at[1]);
+    let path = dir.join(name);
+    photo.save(&path).expect("save");
+    path
+}
+
+/// Each fitted body keypoint by name, in the photo's pixels.
+fn fitted_in_photo(
+    report: &guava::reconstruct::Report,
+    crop: Option<Crop>,
+    photo: [u32; 2],
+) -> Vec<(String, Vec2)> {
+    let crop = crop.unwrap_or(Crop::centred(photo[0], photo[1]));
+    let fit = report.fit.as_ref().expect("fitted");
+    fit.surface
+        .iter()
+        .zip(&fit.fitted)
+        .map(|(l, &p)| (l.name.clone(), crop.to_photo(p, SOURCE_SIZE as f32)))
+        .collect()
+}
+
+/// The keypoints the portrait shows well inside its edges. Elbows, hips and knees lie at or past
+/// its bottom edge, where the pose model guesses and the fit extrapolates them.
+const SEEN: [&str; 7] = [
+    "nose",
+    "left_eye",
+    "right_eye",
+    "left_ear",
+    "right_ear",
+    "left_shoulder",
+    "right_shoulder",
+];
+
+/// Reframed, the fit lands where it lands on the portrait alone: the head's points within 8 px
+/// and the shoulders (inside the suit's bulk) within 15 px, of a 512 px portrait. The two fits
+/// see the person at different scales and places in the pose model's crop, and each explains
+/// its keypoints to only ~5 px RMS; measured: head ≤ 4.4 px, shoulders ≤ 10 px. Unframed, the
+/// wide and tall photos are refused (the centred square shows too little of her to find her).
+#[test]
+fn a_person_the_centred_square_cuts_or_shrinks_is_framed_and_fitted_in_place() {
+    let body = BodyModel::default_body().expect("body");
+    let uv = UvMap::for_body(&body, DEFAULT_UV_SIZE);
+    let mut models = Landmarkers::load(OnnxRuntime::load().expect("ONNX Runtime")).expect("models");
+    let mut fit = |photo: &Path| {
+        reconstruct_photo_file(
+            &body,
+            &uv,
+            photo,
+            Tracked::Fit,
+            Some(&mut models),
+            &mut |_| true,
+        )
+        .unwrap_or_else(|e| panic!("{}: {e}", photo.display()))
+    };
+    let (_, alone, view) = fit(Path::new("assets/demo_portrait.png"));
+    assert_eq!(view.crop, None, "the portrait's own square stays");
+    let reference = fitted_in_photo(&alone, None, [512, 512]);
+    let dir = temp_dir();
+    for (name, size, at) in [
+        ("wide.png", [1024, 512], [0, 0]),
+        ("tall.png", [512, 1024], [0, 0]),
+        ("small.png", [1600, 1600], [544, 700]),
+    ] {
+        let photo = placed(&dir, name, size, at);
+        let (_, report, view) = fit(&photo);
+        let crop = view.crop.expect("reframed");
+        // The astronaut (not the flag, not the helmet she holds) spans x 20…360 of the
+        // portrait from the top of her hair (y 15) down past its bottom edge: all in the square.
+        let offset = Vec2::new(at[0] as f32, at[1] as f32);
+        let (low, high) = (
+            Vec2::new(crop.left as f32, crop.top as f32) - offset,
+            Vec2::new(crop.left as f32, crop.top as f32) + crop.side as f32 - offset,
+        );
+        println!(
+            "{name}: framed {}² at ({}, {}) → portrait x {:.0}…{:.0}, y {:.0}…{:.0}; {:.1} px RMS",
+            crop.side,
+            crop.left,
+            crop.top,
+            low.x,
+            high.x,
+            low.y,
+            high.y,
+            report.fit.as_ref().map_or(f32::NAN, |f| f.rms_px)
+        );
+        assert!(
+            low.x < 20.0 && high.x > 360.0 && low.y < 15.0 && high.y >= 512.0,
+            "{crop:?}"
+        );
+        let offsets: Vec<(String, f32)> = fitted_in_photo(&report, view.crop, size)
+            .into_iter()
+            .filter_map(|(key, p)| {
+                let (_, q) = reference.iter().find(|(k, _)| *k == key)?;
+                Some((key, (p - offset).distance(*q)))
+            })
+            .collect();
+        println!("  {offsets:.1?}");
+        let head_and_shoulders = offsets
+            .iter()
+            .filter(|(key, _)| SEEN.contains(&key.as_str()));
+        assert_eq!(head_and_shoulders.clone().count(), SEEN.len(), "{name}");
+        for (key, off) in head_and_shoulders {
+            let bound = if key.ends_with("shoulder") { 15.0 } else { 8.0 };
+            assert!(
+                *off < bound,
+                "{name}: {key} {off:.1} px from the portrait's fit"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The frame is part of the view: a tracking file keeps it, and reconstructing the photo from
+/// that file reads the same square (the same avatar as the fit's own reconstruction).
+#[test]
+fn the_frame_travels_with_the_tracking_file() {
+    let body = BodyModel::default_body().expect("body");
+    let uv = UvMap::for_body(&body, DEFAULT_UV_SIZE);
+    let mut models = Landmarkers::load(OnnxRuntime::load().expect("ONNX Runtime")).expect("models");
+    let dir = temp_dir().join("tracking");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let photo = placed(&dir, "wide.png", [1024, 512], [0, 0]);
+    let (fitted, _, view) = reconstruct_photo_file(
+        &body,
+        &uv,
+        &photo,
+        Tracked::Fit,
+        Some(&mut models),
+        &mut |_| true,
+    )
+    .expect("fits");
+    let crop = view.crop.expect("reframed");
+    let file = dir.join("wide.json");
+    view.to_tracking(&body, "fit").save(&file).expect("save");
+    let tracking = Tracking::load(&file).expect("load");
+    let back = SourceView::from_tracking(&tracking, &body, "wide.json").expect("view");
+    assert_eq!(back.crop, Some(crop));
+    let (tracked, _, _) = reconstruct_photo_file(
+        &body,
+        &uv,
+        &photo,
+        Tracked::File(&file),
+        Some(&mut models),
+        &mut |_| true,
+    )
+    .expect("reconstructs from the tracking");
+    assert_eq!(tracked.uv, fitted.uv, "the same square, the same avatar");
+
+    // A crop that misses the photo is refused when the photo is read, naming the photo.
+    let mut far = view.clone();
+    far.crop = Some(Crop {
+        left: 5000,
+        top: 0,
+        side: 512,
+    });
+    far.to_tracking(&body, "fit").save(&file).expect("save");
+    let e = reconstruct_photo_file(&body, &uv, &photo, Tracked::File(&file), None, &mut |_| {
+        true
+    })
+    .expect_err("outside the photo")
+    .to_string();
+    assert!(
+        e.contains("wide.png") && e.contains("lies outside the photo"),
+        "{e}"
+    );
+    // A crop without a side is refused when the tracking file is read, naming the field.
+    let mut sideless = far.to_tracking(&body, "fit");
+    sideless.frames[0].camera.as_mut().expect("camera").crop = Some([0, 0, 0]);
+    std::fs::write(&file, serde_json::to_vec(&sideless).expect("json")).expect("write");
+    let e = Tracking::load(&file).expect_err("no side").to_string();
+    assert!(e.contains("frame 0: camera.crop"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
