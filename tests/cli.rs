@@ -186,6 +186,41 @@ fn fit_writes_tracking_and_takes_a_model_folder() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `guava fit` frames a person the centred square cuts (the portrait at the top of a tall
+/// photo) and says so; the tracking file keeps the frame, and `guava reconstruct` reads the photo
+/// through it (the tracking beside the photo, as a user would leave it).
+#[test]
+fn fit_frames_the_person_and_reconstruct_reads_the_frame() {
+    let dir = std::env::temp_dir().join(format!("guava-cli-frame-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let photo = crate::common::portrait_placed(&dir, "tall.png", [512, 1024], [0, 0]);
+    let tracking = guava::reconstruct::tracking_beside(&photo);
+    let (photo_s, tracking_s) = (
+        photo.to_str().expect("utf-8"),
+        tracking.to_str().expect("utf-8"),
+    );
+    let (ok, stdout, stderr) = guava(&["fit", "--image", photo_s, "--out", tracking_s]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains(", framed "), "{stdout}");
+    let fitted = guava::tracking::Tracking::load(&tracking).expect("a valid tracking file");
+    let [_, top, side] = fitted.frames[0]
+        .camera
+        .and_then(|c| c.crop)
+        .expect("the frame is written");
+    // The portrait's person reaches its top and bottom: the square holds all 512 rows.
+    assert!(top <= 0 && top + side >= 512, "{top}, {side}");
+    let avatar = dir.join("tall.guava");
+    let (ok, stdout, stderr) = guava(&[
+        "reconstruct",
+        "--image",
+        photo_s,
+        "--out",
+        avatar.to_str().expect("utf-8"),
+    ]);
+    assert!(ok && avatar.exists(), "{stdout}{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `guava fit --dwpose`: EHM-Tracker's checkpoint folder (here the stand-in models of
 /// tests/data/dwpose) places the body and hand points; the tracking file says so. A folder
 /// without its two files is one error naming them, and nothing is written.

@@ -13,24 +13,13 @@ use guava::reconstruct::{
     Crop, DEFAULT_UV_SIZE, SOURCE_SIZE, SourceView, Tracked, UvMap, reconstruct_photo_file,
 };
 use guava::tracking::Tracking;
-use image::{Rgb, RgbImage, imageops};
+
+use crate::common::portrait_placed;
 
 fn temp_dir() -> PathBuf {
     let dir = std::env::temp_dir().join(format!("guava-framing-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     dir
-}
-
-/// The demo portrait pasted at `at` on a `size` canvas of its background's grey, as a PNG.
-fn placed(dir: &Path, name: &str, size: [u32; 2], at: [i64; 2]) -> PathBuf {
-    let portrait = image::open("assets/demo_portrait.png")
-        .expect("portrait")
-        .to_rgb8();
-    let mut photo = RgbImage::from_pixel(size[0], size[1], Rgb([150, 150, 160]));
-    imageops::replace(&mut photo, &portrait, at[0], at[1]);
-    let path = dir.join(name);
-    photo.save(&path).expect("save");
-    path
 }
 
 /// Each fitted body keypoint by name, in the photo's pixels.
@@ -90,7 +79,7 @@ fn a_person_the_centred_square_cuts_or_shrinks_is_framed_and_fitted_in_place() {
         ("tall.png", [512, 1024], [0, 0]),
         ("small.png", [1600, 1600], [544, 700]),
     ] {
-        let photo = placed(&dir, name, size, at);
+        let photo = portrait_placed(&dir, name, size, at);
         let (_, report, view) = fit(&photo);
         let crop = view.crop.expect("reframed");
         // The astronaut (not the flag, not the helmet she holds) spans x 20…360 of the
@@ -147,7 +136,7 @@ fn the_frame_travels_with_the_tracking_file() {
     let mut models = Landmarkers::load(OnnxRuntime::load().expect("ONNX Runtime")).expect("models");
     let dir = temp_dir().join("tracking");
     std::fs::create_dir_all(&dir).expect("dir");
-    let photo = placed(&dir, "wide.png", [1024, 512], [0, 0]);
+    let photo = portrait_placed(&dir, "wide.png", [1024, 512], [0, 0]);
     let (fitted, _, view) = reconstruct_photo_file(
         &body,
         &uv,

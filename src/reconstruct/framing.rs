@@ -12,7 +12,7 @@ use image::RgbaImage;
 use super::source::{Crop, SOURCE_SIZE, SourceImage};
 use super::{ReconstructError, Stage};
 use crate::fit::MIN_PRESENCE;
-use crate::keypoints::{Detections, Landmarkers};
+use crate::keypoints::{Detections, Landmarkers, PoseKeypoints};
 
 /// The share of the person the centred square may leave out before the photo is reframed (a
 /// mask's stray edge pixels stay under it).
@@ -95,15 +95,6 @@ pub fn frame(mask: &PersonMask, width: u32, height: u32) -> Option<Crop> {
     (cut || small).then_some(around)
 }
 
-/// Whether the person on a `size`² source of a `width × height` photo's centred square reaches
-/// one of the square's edges that the photo continues past (so part of them may be cut off).
-fn reaches_cut_edge(mask: &[f32], size: usize, width: u32, height: u32) -> bool {
-    let line = |cell: &dyn Fn(usize) -> usize| (0..size).any(|i| mask[cell(i)] >= PERSON);
-    let last = size - 1;
-    (width > height && (line(&|i| i * size) || line(&|i| i * size + last)))
-        || (height > width && (line(&|i| i) || line(&|i| last * size + i)))
-}
-
 /// The photo as reconstruction reads it: its pixels, the square the view sees at
 /// [`SOURCE_SIZE`], and what the keypoint models found there.
 pub struct SourcePhoto {
@@ -164,9 +155,10 @@ impl SourcePhoto {
     }
 
     /// Frames the person and detects every keypoint on the chosen square. The alpha frames a
-    /// photo that has one before any model runs; else the models' first look is the centred
-    /// square, then (only when the person reaches an edge the photo continues past) the pose
-    /// model on the whole photo, and the models again on the reframed square.
+    /// photo that has one before any model runs. Else the pose model looks at the whole photo
+    /// (padded square): on a square photo that is the centred square, where every model runs at
+    /// once and runs again only on a reframed square; on another the pose model alone looks
+    /// first, and every model runs on the square it frames.
     fn fit(
         pixels: &RgbaImage,
         has_alpha: bool,
@@ -179,27 +171,23 @@ impl SourcePhoto {
         let crop = if has_alpha {
             frame(&PersonMask::alpha(pixels), width, height)
         } else {
-            let image = read(None)?;
-            let found = detect(models, &image, progress)?;
-            let size = SOURCE_SIZE as usize;
-            let mask = found.pose.mask_at(size);
-            // A person the centred square misses or cuts is looked for on the whole photo.
-            let whole = if width != height
-                && (found.pose.presence < MIN_PRESENCE
-                    || reaches_cut_edge(&mask, size, width, height))
-            {
-                let padded = Crop::padded(width, height);
-                started(progress)?;
-                let pose = models.pose(&read(Some(padded))?).map_err(keypoint_error)?;
+            let whole = Crop::padded(width, height);
+            let image = read(Some(whole))?;
+            let person = |pose: &PoseKeypoints| {
                 (pose.presence >= MIN_PRESENCE)
-                    .then(|| PersonMask::over(padded, pose.mask_at(size)))
-            } else {
-                (found.pose.presence >= MIN_PRESENCE)
-                    .then(|| PersonMask::over(Crop::centred(width, height), mask))
+                    .then(|| PersonMask::over(whole, pose.mask_at(SOURCE_SIZE as usize)))
             };
-            match whole.and_then(|m| frame(&m, width, height)) {
-                None => return Ok((None, image, found)),
-                crop => crop,
+            let (person, found) = if width == height {
+                let found = detect(models, &image, progress)?;
+                (person(&found.pose), Some(found))
+            } else {
+                started(progress)?;
+                (person(&models.pose(&image).map_err(keypoint_error)?), None)
+            };
+            match (person.and_then(|m| frame(&m, width, height)), found) {
+                // The whole square photo is its centred square.
+                (None, Some(found)) => return Ok((None, image, found)),
+                (crop, _) => crop,
             }
         };
         let image = read(crop)?;
@@ -312,19 +300,5 @@ mod tests {
         // Cells of the padding are not the person.
         let mask = PersonMask::over(Crop::padded(200, 400), vec![1.0; 16]);
         assert_eq!(mask.person(200, 400).count(), 8);
-    }
-
-    #[test]
-    fn only_edges_the_photo_continues_past_count_as_cut() {
-        let size = 8;
-        let mut left = vec![0.0; size * size];
-        left[3 * size] = 1.0;
-        assert!(reaches_cut_edge(&left, size, 300, 200));
-        assert!(!reaches_cut_edge(&left, size, 200, 300));
-        assert!(!reaches_cut_edge(&left, size, 200, 200));
-        let mut bottom = vec![0.0; size * size];
-        bottom[size * size - 3] = 1.0;
-        assert!(reaches_cut_edge(&bottom, size, 200, 300));
-        assert!(!reaches_cut_edge(&bottom, size, 300, 200));
     }
 }
