@@ -108,13 +108,24 @@ impl SourceImage {
         Self::from_rgba_at(&decoded, crop, has_alpha, &path.display().to_string(), size)
     }
 
-    /// The photo's pixels and whether it has an alpha channel, for making it at several sizes
-    /// ([`Self::from_rgba_at`]) from one decoding.
+    /// The photo's pixels, upright, and whether it has an alpha channel, for making it at
+    /// several sizes ([`Self::from_rgba_at`]) from one decoding. Phones store a portrait
+    /// sideways with an Exif orientation tag; it is applied here, as every image viewer does.
     pub fn decode(path: &Path) -> Result<(RgbaImage, bool), ReconstructError> {
-        let decoded = image::open(path).map_err(|e| ReconstructError::Image {
+        use image::ImageDecoder;
+        let fail = |e: image::ImageError| ReconstructError::Image {
             file: path.display().to_string(),
             problem: e.to_string(),
-        })?;
+        };
+        let mut decoder = image::ImageReader::open(path)
+            .map_err(|e| fail(e.into()))?
+            .with_guessed_format()
+            .map_err(|e| fail(e.into()))?
+            .into_decoder()
+            .map_err(fail)?;
+        let orientation = decoder.orientation().map_err(fail)?;
+        let mut decoded = image::DynamicImage::from_decoder(decoder).map_err(fail)?;
+        decoded.apply_orientation(orientation);
         let has_alpha = decoded.color().has_alpha();
         Ok((decoded.to_rgba8(), has_alpha))
     }
