@@ -537,9 +537,15 @@ fn fit(
     use guava::fit::{fit_detections, fit_ehm_detections};
     let mut models = landmarkers(models)?;
     let t0 = std::time::Instant::now();
-    let read = guava::reconstruct::framing::SourcePhoto::read(
+    use guava::reconstruct::framing::{Framing, SourcePhoto, Square};
+    // Framed as the reconstruction of that body frames it (GUAVA mode: EHM-Tracker's crop).
+    let framing = match ehm {
+        Some(_) => Framing::AroundPerson,
+        None => Framing::KeepCentred,
+    };
+    let read = SourcePhoto::read(
         image,
-        None,
+        Square::Fitted(framing),
         Some(&mut models),
         true,
         &mut |_| true,

@@ -324,7 +324,8 @@ fn reconstruct_in_guava_mode_with_exported_networks() {
 }
 
 /// GUAVA mode on a photo without tracking: `guava fit --ehm` writes the EHM's tracking (SMPL-X
-/// joints, EHM identity, FLAME parameters), which `guava reconstruct` in GUAVA mode takes; without
+/// joints, EHM identity, FLAME parameters, EHM-Tracker's frame), which `guava reconstruct` in
+/// GUAVA mode takes; without
 /// a tracking file beside the photo, GUAVA mode fits it itself and says how well.
 #[test]
 fn guava_mode_fits_photos_without_tracking() {
@@ -339,9 +340,17 @@ fn guava_mode_fits_photos_without_tracking() {
     let (ok, stdout, stderr) =
         guava(&["fit", "--image", &photo_s, "--ehm", ehm, "--out", &track_s]);
     assert!(ok, "{stderr}");
-    assert!(stdout.contains("fitted to 11 body keypoints"), "{stdout}");
+    // GUAVA mode frames the portrait as EHM-Tracker would, though it is already square.
+    assert!(stdout.contains(", framed "), "{stdout}");
+    let fitted = stdout
+        .lines()
+        .find(|l| l.contains("body keypoints"))
+        .expect("the fit's line")
+        .trim()
+        .to_owned();
     let tracking = guava::tracking::Tracking::load(&track).expect("a valid tracking file");
     assert_eq!(tracking.body, guava::tracking::BodyKind::Smplx);
+    assert!(tracking.frames[0].camera.and_then(|c| c.crop).is_some());
     assert_eq!(tracking.joints.len(), 55);
     assert!(tracking.identity.ehm.is_some());
     assert!(
@@ -371,7 +380,8 @@ fn guava_mode_fits_photos_without_tracking() {
     assert!(!stdout.contains("fitted to"), "{stdout}");
     let (ok, stdout, stderr) = reconstruct(&[]);
     assert!(ok, "{stderr}");
-    assert!(stdout.contains("fitted to 11 body keypoints"), "{stdout}");
+    // Framed and fitted as `guava fit` framed and fitted it.
+    assert!(stdout.contains(&fitted), "{fitted}: {stdout}");
     assert!(guava::avatar::Avatar::load(&out).is_ok());
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -21,7 +21,7 @@ use crate::body::{EhmModel, Posable, PosedBody};
 use crate::camera::Camera;
 use crate::fit::{FitReport, fit_ehm_detections};
 use crate::keypoints::{Keypoint, Landmarkers};
-use crate::reconstruct::framing::SourcePhoto;
+use crate::reconstruct::framing::{Framing, SourcePhoto, Square};
 use crate::reconstruct::raster::rasterize;
 use crate::reconstruct::{
     ReconstructError, SOURCE_SIZE, SourceImage, SourceView, Stage, StageClock, Tracked, UvMap,
@@ -264,13 +264,13 @@ pub fn reconstruct_guava_file(
         Tracked::Fit => None,
     };
     // The keypoint models see the photo at the source size, the encoder at its own.
-    let read = SourcePhoto::read(
-        photo,
-        given.as_ref().map(|(view, _)| view.crop),
-        landmarkers.as_deref_mut(),
-        false,
-        progress,
-    )?;
+    // A fitted photo is framed as EHM-Tracker framed the photos GUAVA learned from.
+    let square = given
+        .as_ref()
+        .map_or(Square::Fitted(Framing::AroundPerson), |(view, _)| {
+            Square::Tracked(view.crop)
+        });
+    let read = SourcePhoto::read(photo, square, landmarkers.as_deref_mut(), false, progress)?;
     let size = models.dims.image as u32;
     let mut image =
         SourceImage::from_rgba_at(&read.pixels, read.crop, read.has_alpha, &file, size)?;

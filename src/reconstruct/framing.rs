@@ -1,8 +1,9 @@
 //! Which square of the photo reconstruction sees. A tracked view says (its crop, or the centred
-//! square); a photo fitted here is framed around the person: the centred square is kept when it
-//! holds the whole person at a useful size, so a photo already framed for GUAVA stays as it is;
-//! otherwise the square is EHM-Tracker's body crop around the person ([`Crop::around`]), padded
-//! where it passes the photo's edges. The person is the photo's alpha, else the pose model's mask.
+//! square); a photo fitted here is framed around the person ([`Framing`]): in GUAVA mode always
+//! with EHM-Tracker's body crop ([`Crop::around`], padded where it passes the photo's edges), as
+//! GUAVA's networks learned from such crops; in default mode the centred square is kept when it
+//! holds the whole person at a useful size, so a photo its user framed stays as it is. The
+//! person is the photo's alpha, else the pose model's mask.
 
 use std::path::Path;
 
@@ -69,10 +70,29 @@ impl PersonMask {
     }
 }
 
-/// The square to reconstruct a `width × height` photo's person from: `None` keeps the centred
-/// square (it holds all but [`MAX_CUT`] of the person, who spans at least [`MIN_SHARE`] of it),
-/// else EHM-Tracker's square around the person's box. `None` too when the mask has nobody.
-pub fn frame(mask: &PersonMask, width: u32, height: u32) -> Option<Crop> {
+/// How a fitted photo is framed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Framing {
+    /// The centred square unless it cuts the person off or leaves them small (default mode).
+    KeepCentred,
+    /// EHM-Tracker's body crop around the person, always (GUAVA mode).
+    AroundPerson,
+}
+
+/// Which square of the photo is read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Square {
+    /// A tracked view's crop (`None`: the centred square).
+    Tracked(Option<Crop>),
+    /// Framed around the person the keypoint models find, then fitted.
+    Fitted(Framing),
+}
+
+/// The square to reconstruct a `width × height` photo's person from: EHM-Tracker's square
+/// around the person's box, or `None` for the centred square when `framing` keeps it and it
+/// holds all but [`MAX_CUT`] of the person, who spans at least [`MIN_SHARE`] of it. `None` too
+/// when the mask has nobody.
+pub fn frame(mask: &PersonMask, width: u32, height: u32, framing: Framing) -> Option<Crop> {
     let centred = Crop::centred(width, height);
     let (low, high) = (
         Vec2::new(centred.left as f32, centred.top as f32),
@@ -92,7 +112,7 @@ pub fn frame(mask: &PersonMask, width: u32, height: u32) -> Option<Crop> {
     let around = Crop::around([min.x, min.y, max.x, max.y]);
     let cut = (all - inside) as f32 > MAX_CUT * all as f32;
     let small = (around.side as f32) < MIN_SHARE * centred.side as f32;
-    (cut || small).then_some(around)
+    (framing == Framing::AroundPerson || cut || small).then_some(around)
 }
 
 /// The photo as reconstruction reads it: its pixels, the square the view sees at
@@ -107,14 +127,14 @@ pub struct SourcePhoto {
 }
 
 impl SourcePhoto {
-    /// Reads `photo`. With `known` (a tracked view's crop) the square is that one, and the pose
-    /// model alone runs when `models` are given and the photo has no alpha (for the person
-    /// mask) or `points` asks (the points the viewer shows). Without, the photo is fitted:
-    /// `models` find the person, framed as [`frame`] says, and every keypoint model runs on the
-    /// chosen square. `progress` hears [`Stage::Fit`] before each model run.
+    /// Reads `photo`'s `square`. A tracked square is read as it is, and the pose model alone
+    /// runs when `models` are given and the photo has no alpha (for the person mask) or
+    /// `points` asks (the points the viewer shows). A fitted one is framed around the person
+    /// `models` find ([`frame`]), and every keypoint model runs on the chosen square.
+    /// `progress` hears [`Stage::Fit`] before each model run.
     pub fn read(
         photo: &Path,
-        known: Option<Option<Crop>>,
+        square: Square,
         models: Option<&mut Landmarkers>,
         points: bool,
         progress: &mut dyn FnMut(Stage) -> bool,
@@ -122,8 +142,8 @@ impl SourcePhoto {
         let file = photo.display().to_string();
         let (pixels, has_alpha) = SourceImage::decode(photo)?;
         let read = |crop| SourceImage::from_rgba_at(&pixels, crop, has_alpha, &file, SOURCE_SIZE);
-        let (crop, image, detections) = match (known, models) {
-            (Some(crop), models) => {
+        let (crop, image, detections) = match (square, models) {
+            (Square::Tracked(crop), models) => {
                 let image = read(crop)?;
                 let detections = match models.filter(|_| points || !has_alpha) {
                     Some(models) => {
@@ -135,11 +155,12 @@ impl SourcePhoto {
                 };
                 (crop, image, detections)
             }
-            (None, Some(models)) => {
-                let (crop, image, found) = Self::fit(&pixels, has_alpha, &file, models, progress)?;
+            (Square::Fitted(framing), Some(models)) => {
+                let (crop, image, found) =
+                    Self::fit(&pixels, has_alpha, &file, framing, models, progress)?;
                 (crop, image, Some(found))
             }
-            (None, None) => {
+            (Square::Fitted(_), None) => {
                 return Err(ReconstructError::Keypoints(
                     "fitting a photo needs the keypoint models, which did not load".into(),
                 ));
@@ -163,13 +184,14 @@ impl SourcePhoto {
         pixels: &RgbaImage,
         has_alpha: bool,
         file: &str,
+        framing: Framing,
         models: &mut Landmarkers,
         progress: &mut dyn FnMut(Stage) -> bool,
     ) -> Result<(Option<Crop>, SourceImage, Detections), ReconstructError> {
         let (width, height) = pixels.dimensions();
         let read = |crop| SourceImage::from_rgba_at(pixels, crop, has_alpha, file, SOURCE_SIZE);
         let crop = if has_alpha {
-            frame(&PersonMask::alpha(pixels), width, height)
+            frame(&PersonMask::alpha(pixels), width, height, framing)
         } else {
             let whole = Crop::padded(width, height);
             let image = read(Some(whole))?;
@@ -184,7 +206,10 @@ impl SourcePhoto {
                 started(progress)?;
                 (person(&models.pose(&image).map_err(keypoint_error)?), None)
             };
-            match (person.and_then(|m| frame(&m, width, height)), found) {
+            match (
+                person.and_then(|m| frame(&m, width, height, framing)),
+                found,
+            ) {
                 // The whole square photo is its centred square.
                 (None, Some(found)) => return Ok((None, image, found)),
                 (crop, _) => crop,
@@ -222,6 +247,9 @@ fn keypoint_error(e: impl std::fmt::Display) -> ReconstructError {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::reconstruct::source::MIN_SOURCE_SIDE;
+
+    const KEEP: Framing = Framing::KeepCentred;
 
     /// A mask over a `width × height` photo with the person on `[l, r) × [t, b)`.
     fn person(width: u32, height: u32, [l, t, r, b]: [u32; 4]) -> PersonMask {
@@ -238,18 +266,31 @@ mod tests {
     fn a_person_inside_the_centred_square_keeps_it() {
         // Wide photo, person centred and filling most of the height.
         assert_eq!(
-            frame(&person(400, 200, [150, 20, 250, 200]), 400, 200),
+            frame(&person(400, 200, [150, 20, 250, 200]), 400, 200, KEEP),
             None
         );
         // Square photo the person fills, cut by its bottom edge as portraits are.
-        assert_eq!(frame(&person(300, 300, [40, 30, 260, 300]), 300, 300), None);
-        assert_eq!(frame(&person(300, 300, [0, 0, 0, 0]), 300, 300), None);
+        assert_eq!(
+            frame(&person(300, 300, [40, 30, 260, 300]), 300, 300, KEEP),
+            None
+        );
+        assert_eq!(frame(&person(300, 300, [0, 0, 0, 0]), 300, 300, KEEP), None);
+        // GUAVA mode frames them as EHM-Tracker does all the same.
+        let around = Framing::AroundPerson;
+        assert_eq!(
+            frame(&person(300, 300, [40, 30, 260, 300]), 300, 300, around),
+            Some(Crop::around([40.0, 30.0, 260.0, 300.0]))
+        );
+        assert_eq!(
+            frame(&person(300, 300, [0, 0, 0, 0]), 300, 300, around),
+            None
+        );
     }
 
     #[test]
     fn a_person_the_centred_square_cuts_is_framed_as_ehm_tracker_frames_them() {
         // Off-centre in a wide photo: box 100 wide, 180 tall → side 198 around its centre.
-        let crop = frame(&person(400, 200, [20, 20, 120, 200]), 400, 200).expect("reframed");
+        let crop = frame(&person(400, 200, [20, 20, 120, 200]), 400, 200, KEEP).expect("reframed");
         assert_eq!(
             crop,
             Crop {
@@ -259,20 +300,24 @@ mod tests {
             }
         );
         // Tall photo, head near the top: the centred square (its rows 100–300) cuts it.
-        let crop = frame(&person(200, 400, [30, 20, 170, 400]), 200, 400).expect("reframed");
+        let crop = frame(&person(200, 400, [30, 20, 170, 400]), 200, 400, KEEP).expect("reframed");
         assert_eq!((crop.side, crop.top), (418, 1));
         // Just under 1 % outside stays; just over is reframed.
         let edge = |cut: u32| person(400, 200, [100 - cut, 0, 300, 200]);
-        assert_eq!(frame(&edge(2), 400, 200), None, "2 of 202 columns: 0.99 %");
+        assert_eq!(
+            frame(&edge(2), 400, 200, KEEP),
+            None,
+            "2 of 202 columns: 0.99 %"
+        );
         assert!(
-            frame(&edge(3), 400, 200).is_some(),
+            frame(&edge(3), 400, 200, KEEP).is_some(),
             "3 of 203 columns: 1.5 %"
         );
     }
 
     #[test]
     fn a_small_person_is_framed_closer() {
-        let crop = frame(&person(1000, 1000, [450, 400, 550, 600]), 1000, 1000);
+        let crop = frame(&person(1000, 1000, [450, 400, 550, 600]), 1000, 1000, KEEP);
         assert_eq!(
             crop,
             Some(Crop {
@@ -281,9 +326,12 @@ mod tests {
                 side: 220
             })
         );
+        // A person of a few pixels gets the smallest square reconstruction reads.
+        let tiny = frame(&person(1000, 1000, [500, 500, 510, 520]), 1000, 1000, KEEP);
+        assert_eq!(tiny.map(|c| c.side), Some(MIN_SOURCE_SIDE));
         // At half the square's side or more, the square stays.
         assert_eq!(
-            frame(&person(1000, 1000, [300, 300, 700, 760]), 1000, 1000),
+            frame(&person(1000, 1000, [300, 300, 700, 760]), 1000, 1000, KEEP),
             None
         );
     }

@@ -312,8 +312,8 @@ pub enum MaskSource {
 
 /// Reads `photo`, gets its pose and camera (from a tracking file or by fitting keypoints), and
 /// runs [`reconstruct_default`] on `body`: what the CLI and the viewer's worker call. A fitted
-/// photo is framed around the person ([`framing`]); a tracked one is read in its tracking's
-/// square. A photo without alpha is masked by the pose model's segmentation when `landmarkers`
+/// photo is framed around the person when its centred square will not do
+/// ([`framing::Framing::KeepCentred`]); a tracked one is read in its tracking's square. A photo without alpha is masked by the pose model's segmentation when `landmarkers`
 /// are given (else by the body's silhouette). Fitting needs `landmarkers`. Every error names the
 /// file.
 pub fn reconstruct_photo_file(
@@ -340,9 +340,14 @@ pub fn reconstruct_photo_file(
         Tracked::Given(view) => Some(view),
         Tracked::Fit => None,
     };
+    use framing::{Framing, Square};
     let read = framing::SourcePhoto::read(
         photo,
-        given.as_ref().map(|v| v.crop),
+        given
+            .as_ref()
+            .map_or(Square::Fitted(Framing::KeepCentred), |v| {
+                Square::Tracked(v.crop)
+            }),
         landmarkers.as_deref_mut(),
         points,
         progress,

@@ -47,11 +47,13 @@ impl Crop {
     }
 
     /// EHM-Tracker's body crop around a person's box (`crop_image_by_bbox`, scale 1.1): a square
-    /// 1.1 times the box's longer side, centred on the box. `bounds` are left, top, right, bottom
-    /// in the photo's pixels.
+    /// 1.1 times the box's longer side, centred on the box, and at least [`MIN_SOURCE_SIDE`].
+    /// `bounds` are left, top, right, bottom in the photo's pixels.
     pub fn around(bounds: [f32; 4]) -> Self {
         let [l, t, r, b] = bounds;
-        let side = ((r - l).max(b - t) * 1.1).round().max(1.0);
+        let side = ((r - l).max(b - t) * 1.1)
+            .round()
+            .max(MIN_SOURCE_SIDE as f32);
         Self {
             left: ((l + r - side) / 2.0).round() as i32,
             top: ((t + b - side) / 2.0).round() as i32,
