@@ -221,15 +221,16 @@ fn fit_frames_the_person_and_reconstruct_reads_the_frame() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `guava fit --dwpose`: EHM-Tracker's checkpoint folder (here the stand-in models of
-/// tests/data/dwpose) places the body and hand points; the tracking file says so. A folder
-/// without its two files is one error naming them, and nothing is written.
+/// `guava fit --dwpose`: EHM-Tracker's checkpoint folder (here the oracle stand-ins of
+/// tests/data/dwpose_oracle; the random stand-ins' YOLOX boxes would frame nobody) places the
+/// body and hand points; the tracking file says so. A folder without its two files is one error
+/// naming them, and nothing is written.
 #[test]
 fn fit_takes_ehm_trackers_keypoint_models() {
     let dir = std::env::temp_dir().join(format!("guava-cli-dwpose-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
     let portrait = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/demo_portrait.png");
-    let stand_in = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/dwpose");
+    let stand_in = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/dwpose_oracle");
     let out = dir.join("fit.json");
     let out_s = out.to_str().expect("utf-8");
     let fit = |models: &str| {

@@ -181,6 +181,13 @@ fn wholebody_keeps_the_largest_person_and_gives_the_fit_its_points() {
         found.people.len(),
         fixture["boxes"].as_array().expect("boxes").len()
     );
+    // Its box (pixel edges) is the one the tracker crops around: centred where DWPose's crop is.
+    let [l, t, r, b] = found.person().expect("a kept person");
+    let middle = Vec2::new(l + r, t + b) / 2.0 - 0.5;
+    assert!(
+        (middle.as_dvec2() - DVec2::new(centre[0], centre[1])).length() < 1e-3,
+        "{middle}"
+    );
 
     // The body points under the fit's names, in our pixel-edge coordinates.
     let body = found.body();
@@ -353,4 +360,35 @@ fn the_fit_reads_dwposes_points_as_given() {
     // left on the image's right.
     assert!(b[0].1.z < b[3].1.z.min(b[4].1.z), "{b:?}");
     assert!(b[1].1.x > b[2].1.x && b[5].1.x > b[6].1.x, "{b:?}");
+}
+
+/// With EHM-Tracker's models loaded, a fitted photo is framed around YOLOX's box of the person
+/// kept, as EHM-Tracker's tracker crops (`crop_image_by_bbox` on `det_info['bbox']`), not around
+/// MediaPipe's mask: on the square demo portrait (whose whole-photo square is the source the
+/// stand-ins ran on above) the frame is exactly `Crop::around` that box.
+#[test]
+fn ehm_trackers_person_box_frames_the_photo() {
+    use guava::reconstruct::framing::{Framing, SourcePhoto, Square};
+    let mut landmarkers = Landmarkers::load(runtime())
+        .and_then(|m| m.with_wholebody(runtime(), &models()))
+        .expect("models");
+    let boxed = Wholebody::load_dir(runtime(), &models())
+        .expect("stand-ins")
+        .detect(&portrait())
+        .expect("runs")
+        .person()
+        .expect("a kept person");
+    let read = SourcePhoto::read(
+        &data("assets/demo_portrait.png"),
+        Square::Fitted(Framing::AroundPerson),
+        Some(&mut landmarkers),
+        false,
+        &mut |_| true,
+    )
+    .expect("reads");
+    let crop = read.crop.expect("framed");
+    println!("YOLOX box {boxed:?} → {crop:?}");
+    assert_eq!(crop, guava::reconstruct::Crop::around(boxed));
+    // The framed square's detections carry the box the fit's square was framed around.
+    assert!(read.detections.expect("detected").person.is_some());
 }

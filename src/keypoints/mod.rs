@@ -84,6 +84,10 @@ pub struct Detections {
     pub hands: Vec<HandLandmarks>,
     /// The irises in the face mesh's eyes (none without a face).
     pub irises: Vec<Iris>,
+    /// With EHM-Tracker's models, the box of the person whose points these are (YOLOX's, in
+    /// source pixels; [`WholebodyPoints::person`]); `None` with MediaPipe's or when YOLOX
+    /// found nobody.
+    pub person: Option<[f32; 4]>,
 }
 
 impl Detections {
@@ -94,6 +98,7 @@ impl Detections {
             face: None,
             hands: Vec::new(),
             irises: Vec::new(),
+            person: None,
         }
     }
 }
@@ -191,10 +196,12 @@ impl Landmarkers {
     pub fn detect(&mut self, source: &SourceImage) -> Result<Detections, OnnxError> {
         let mut pose = self.pose(source)?;
         let mut hands = Vec::new();
+        let mut person = None;
         if let Some(wholebody) = &mut self.wholebody {
             let found = wholebody.detect(source)?;
             pose.keypoints = found.body();
             hands = found.hands();
+            person = found.person();
         } else {
             for side in [Side::Left, Side::Right] {
                 hands.extend(self.hand.detect(source, &pose, side)?);
@@ -211,7 +218,17 @@ impl Landmarkers {
             face,
             hands,
             irises,
+            person,
         })
+    }
+
+    /// With EHM-Tracker's models loaded, the box of the person they find on `source`
+    /// ([`Detections::person`]); `None` without them or when YOLOX finds nobody.
+    pub fn person_box(&mut self, source: &SourceImage) -> Result<Option<[f32; 4]>, OnnxError> {
+        match &mut self.wholebody {
+            Some(wholebody) => Ok(wholebody.detect(source)?.person()),
+            None => Ok(None),
+        }
     }
 
     /// The face mesh in the crop the pose model's face points place, or, when they place none

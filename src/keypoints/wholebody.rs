@@ -58,17 +58,17 @@ impl Wholebody {
     pub fn detect(&mut self, source: &SourceImage) -> Result<WholebodyPoints, OnnxError> {
         let photo = Rgb8::from(source);
         let people = self.person.detect(&photo)?;
-        let mut best: Option<(f32, SimccPoints)> = None;
-        for person in people.iter().map(|p| Some(p.corners)) {
-            let found = self.pose.detect(&photo, person)?;
+        let mut best: Option<(f32, SimccPoints, PersonBox)> = None;
+        for person in &people {
+            let found = self.pose.detect(&photo, Some(person.corners))?;
             let area = spanned_area(&found.points);
-            if best.as_ref().is_none_or(|(a, _)| area > *a) {
-                best = Some((area, found));
+            if best.as_ref().is_none_or(|(a, _, _)| area > *a) {
+                best = Some((area, found, *person));
             }
         }
-        let found = match best {
-            Some((_, found)) => found,
-            None => self.pose.detect(&photo, None)?,
+        let (found, kept) = match best {
+            Some((_, found, person)) => (found, Some(person)),
+            None => (self.pose.detect(&photo, None)?, None),
         };
         if found.points.len() != POINTS {
             return Err(OnnxError::Run {
@@ -79,7 +79,11 @@ impl Wholebody {
                 ),
             });
         }
-        Ok(WholebodyPoints { people, found })
+        Ok(WholebodyPoints {
+            people,
+            kept,
+            found,
+        })
     }
 }
 
@@ -108,6 +112,9 @@ pub fn confidence(score: f32) -> f32 {
 pub struct WholebodyPoints {
     /// The people YOLOX found, best first (none: DWPose saw the whole photo).
     pub people: Vec<PersonBox>,
+    /// The one whose points were kept (EHM-Tracker's `det_info['bbox']`, the box its tracker
+    /// crops the photo around).
+    pub kept: Option<PersonBox>,
     /// DWPose's answer for the person kept, in EHM-Tracker's pixel coordinates.
     pub found: SimccPoints,
 }
@@ -120,6 +127,11 @@ impl WholebodyPoints {
             self.found.points[i] + Vec2::splat(0.5),
             confidence(self.found.scores[i]),
         )
+    }
+
+    /// The kept person's box (left, top, right, bottom) in the source's pixel-edge coordinates.
+    pub fn person(&self) -> Option<[f32; 4]> {
+        self.kept.map(|p| p.corners.map(|c| c + 0.5))
     }
 
     /// The 17 COCO body points under the fit's names.
@@ -211,6 +223,7 @@ mod tests {
         }
         WholebodyPoints {
             people: Vec::new(),
+            kept: None,
             found: SimccPoints {
                 crop: SimccCrop {
                     centre: glam::DVec2::ZERO,

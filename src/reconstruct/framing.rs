@@ -88,31 +88,64 @@ pub enum Square {
     Fitted(Framing),
 }
 
-/// The square to reconstruct a `width × height` photo's person from: EHM-Tracker's square
-/// around the person's box, or `None` for the centred square when `framing` keeps it and it
-/// holds all but [`MAX_CUT`] of the person, who spans at least [`MIN_SHARE`] of it. `None` too
-/// when the mask has nobody.
-pub fn frame(mask: &PersonMask, width: u32, height: u32, framing: Framing) -> Option<Crop> {
-    let centred = Crop::centred(width, height);
-    let (low, high) = (
-        Vec2::new(centred.left as f32, centred.top as f32),
-        Vec2::new(centred.left as f32, centred.top as f32) + centred.side as f32,
-    );
-    let (mut min, mut max) = (Vec2::MAX, Vec2::MIN);
-    let (mut all, mut inside) = (0usize, 0usize);
-    for p in mask.person(width, height) {
-        all += 1;
-        inside += usize::from(p.cmpge(low).all() && p.cmplt(high).all());
-        min = min.min(p - 0.5 * mask.cell);
-        max = max.max(p + 0.5 * mask.cell);
+/// Where the person is on a photo: their box (left, top, right, bottom, in the photo's pixels)
+/// and the share of them outside the photo's centred square.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Person {
+    pub bounds: [f32; 4],
+    pub cut: f32,
+}
+
+impl Person {
+    /// The person `mask` shows on a `width × height` photo; `None` when it shows nobody.
+    pub fn from_mask(mask: &PersonMask, width: u32, height: u32) -> Option<Self> {
+        let (low, high) = square_corners(Crop::centred(width, height));
+        let (mut min, mut max) = (Vec2::MAX, Vec2::MIN);
+        let (mut all, mut inside) = (0usize, 0usize);
+        for p in mask.person(width, height) {
+            all += 1;
+            inside += usize::from(p.cmpge(low).all() && p.cmplt(high).all());
+            min = min.min(p - 0.5 * mask.cell);
+            max = max.max(p + 0.5 * mask.cell);
+        }
+        (all > 0).then(|| Self {
+            bounds: [min.x, min.y, max.x, max.y],
+            cut: (all - inside) as f32 / all as f32,
+        })
     }
-    if all == 0 {
-        return None;
+
+    /// A person known by their box (EHM-Tracker's YOLOX box); the cut is the share of the box's
+    /// area on the photo outside the centred square. `None` when the box misses the photo.
+    pub fn from_box(bounds: [f32; 4], width: u32, height: u32) -> Option<Self> {
+        let [l, t, r, b] = bounds;
+        let area = |(lo, hi): (Vec2, Vec2)| {
+            let size = (hi.min(Vec2::new(r, b)) - lo.max(Vec2::new(l, t))).max(Vec2::ZERO);
+            size.x * size.y
+        };
+        let photo = area((Vec2::ZERO, Vec2::new(width as f32, height as f32)));
+        let inside = area(square_corners(Crop::centred(width, height)));
+        (photo > 0.0).then(|| Self {
+            bounds,
+            cut: 1.0 - inside / photo,
+        })
     }
-    let around = Crop::around([min.x, min.y, max.x, max.y]);
-    let cut = (all - inside) as f32 > MAX_CUT * all as f32;
-    let small = (around.side as f32) < MIN_SHARE * centred.side as f32;
-    (framing == Framing::AroundPerson || cut || small).then_some(around)
+}
+
+/// A square's top-left and bottom-right corners.
+fn square_corners(square: Crop) -> (Vec2, Vec2) {
+    let low = Vec2::new(square.left as f32, square.top as f32);
+    (low, low + square.side as f32)
+}
+
+/// The square to reconstruct a `width × height` photo's `person` from: EHM-Tracker's square
+/// around their box, or `None` for the centred square when `framing` keeps it and it holds all
+/// but [`MAX_CUT`] of the person, who spans at least [`MIN_SHARE`] of it. `None` too when there
+/// is nobody.
+pub fn frame(person: Option<Person>, width: u32, height: u32, framing: Framing) -> Option<Crop> {
+    let person = person?;
+    let around = Crop::around(person.bounds);
+    let small = (around.side as f32) < MIN_SHARE * Crop::centred(width, height).side as f32;
+    (framing == Framing::AroundPerson || person.cut > MAX_CUT || small).then_some(around)
 }
 
 /// The photo as reconstruction reads it: its pixels, the square the view sees at
@@ -176,10 +209,11 @@ impl SourcePhoto {
     }
 
     /// Frames the person and detects every keypoint on the chosen square. The alpha frames a
-    /// photo that has one before any model runs. Else the pose model looks at the whole photo
-    /// (padded square): on a square photo that is the centred square, where every model runs at
-    /// once and runs again only on a reframed square; on another the pose model alone looks
-    /// first, and every model runs on the square it frames.
+    /// photo that has one before any model runs. Else the person is found on the whole photo
+    /// (padded square): EHM-Tracker's YOLOX box when its models are loaded (as its tracker
+    /// crops), else the pose model's mask. On a square photo that look is the full detection on
+    /// its centred square, run again only on a reframed square; on another the person is looked
+    /// for first, and every model runs on the square they are framed in.
     fn fit(
         pixels: &RgbaImage,
         has_alpha: bool,
@@ -191,25 +225,38 @@ impl SourcePhoto {
         let (width, height) = pixels.dimensions();
         let read = |crop| SourceImage::from_rgba_at(pixels, crop, has_alpha, file, SOURCE_SIZE);
         let crop = if has_alpha {
-            frame(&PersonMask::alpha(pixels), width, height, framing)
+            let person = Person::from_mask(&PersonMask::alpha(pixels), width, height);
+            frame(person, width, height, framing)
         } else {
             let whole = Crop::padded(width, height);
             let image = read(Some(whole))?;
-            let person = |pose: &PoseKeypoints| {
+            // Source pixels of the whole photo's square are photo pixels scaled and shifted.
+            let on_photo = |[l, t, r, b]: [f32; 4]| {
+                let (low, high) = (
+                    whole.to_photo(Vec2::new(l, t), SOURCE_SIZE as f32),
+                    whole.to_photo(Vec2::new(r, b), SOURCE_SIZE as f32),
+                );
+                Person::from_box([low.x, low.y, high.x, high.y], width, height)
+            };
+            let masked = |pose: &PoseKeypoints| {
+                let mask = PersonMask::over(whole, pose.mask_at(SOURCE_SIZE as usize));
                 (pose.presence >= MIN_PRESENCE)
-                    .then(|| PersonMask::over(whole, pose.mask_at(SOURCE_SIZE as usize)))
+                    .then(|| Person::from_mask(&mask, width, height))
+                    .flatten()
             };
             let (person, found) = if width == height {
                 let found = detect(models, &image, progress)?;
-                (person(&found.pose), Some(found))
+                let person = found.person.map_or_else(|| masked(&found.pose), on_photo);
+                (person, Some(found))
             } else {
                 started(progress)?;
-                (person(&models.pose(&image).map_err(keypoint_error)?), None)
+                let person = match models.person_box(&image).map_err(keypoint_error)? {
+                    Some(boxed) => on_photo(boxed),
+                    None => masked(&models.pose(&image).map_err(keypoint_error)?),
+                };
+                (person, None)
             };
-            match (
-                person.and_then(|m| frame(&m, width, height, framing)),
-                found,
-            ) {
+            match (frame(person, width, height, framing), found) {
                 // The whole square photo is its centred square.
                 (None, Some(found)) => return Ok((None, image, found)),
                 (crop, _) => crop,
@@ -252,37 +299,37 @@ mod tests {
     const KEEP: Framing = Framing::KeepCentred;
 
     /// A mask over a `width × height` photo with the person on `[l, r) × [t, b)`.
-    fn person(width: u32, height: u32, [l, t, r, b]: [u32; 4]) -> PersonMask {
+    fn person(width: u32, height: u32, [l, t, r, b]: [u32; 4]) -> Option<Person> {
         let mut photo = RgbaImage::new(width, height);
         for y in t..b {
             for x in l..r {
                 photo.put_pixel(x, y, image::Rgba([0, 0, 0, 255]));
             }
         }
-        PersonMask::alpha(&photo)
+        Person::from_mask(&PersonMask::alpha(&photo), width, height)
     }
 
     #[test]
     fn a_person_inside_the_centred_square_keeps_it() {
         // Wide photo, person centred and filling most of the height.
         assert_eq!(
-            frame(&person(400, 200, [150, 20, 250, 200]), 400, 200, KEEP),
+            frame(person(400, 200, [150, 20, 250, 200]), 400, 200, KEEP),
             None
         );
         // Square photo the person fills, cut by its bottom edge as portraits are.
         assert_eq!(
-            frame(&person(300, 300, [40, 30, 260, 300]), 300, 300, KEEP),
+            frame(person(300, 300, [40, 30, 260, 300]), 300, 300, KEEP),
             None
         );
-        assert_eq!(frame(&person(300, 300, [0, 0, 0, 0]), 300, 300, KEEP), None);
+        assert_eq!(frame(person(300, 300, [0, 0, 0, 0]), 300, 300, KEEP), None);
         // GUAVA mode frames them as EHM-Tracker does all the same.
         let around = Framing::AroundPerson;
         assert_eq!(
-            frame(&person(300, 300, [40, 30, 260, 300]), 300, 300, around),
+            frame(person(300, 300, [40, 30, 260, 300]), 300, 300, around),
             Some(Crop::around([40.0, 30.0, 260.0, 300.0]))
         );
         assert_eq!(
-            frame(&person(300, 300, [0, 0, 0, 0]), 300, 300, around),
+            frame(person(300, 300, [0, 0, 0, 0]), 300, 300, around),
             None
         );
     }
@@ -290,7 +337,7 @@ mod tests {
     #[test]
     fn a_person_the_centred_square_cuts_is_framed_as_ehm_tracker_frames_them() {
         // Off-centre in a wide photo: box 100 wide, 180 tall → side 198 around its centre.
-        let crop = frame(&person(400, 200, [20, 20, 120, 200]), 400, 200, KEEP).expect("reframed");
+        let crop = frame(person(400, 200, [20, 20, 120, 200]), 400, 200, KEEP).expect("reframed");
         assert_eq!(
             crop,
             Crop {
@@ -300,24 +347,40 @@ mod tests {
             }
         );
         // Tall photo, head near the top: the centred square (its rows 100–300) cuts it.
-        let crop = frame(&person(200, 400, [30, 20, 170, 400]), 200, 400, KEEP).expect("reframed");
+        let crop = frame(person(200, 400, [30, 20, 170, 400]), 200, 400, KEEP).expect("reframed");
         assert_eq!((crop.side, crop.top), (418, 1));
         // Just under 1 % outside stays; just over is reframed.
         let edge = |cut: u32| person(400, 200, [100 - cut, 0, 300, 200]);
         assert_eq!(
-            frame(&edge(2), 400, 200, KEEP),
+            frame(edge(2), 400, 200, KEEP),
             None,
             "2 of 202 columns: 0.99 %"
         );
         assert!(
-            frame(&edge(3), 400, 200, KEEP).is_some(),
+            frame(edge(3), 400, 200, KEEP).is_some(),
             "3 of 203 columns: 1.5 %"
         );
     }
 
     #[test]
+    fn a_person_box_is_cut_by_its_area_outside_the_centred_square() {
+        // 400×200 photo: the centred square spans x 100…300.
+        let cut = |bounds| Person::from_box(bounds, 400, 200).map(|p| p.cut);
+        assert_eq!(cut([120.0, 10.0, 280.0, 200.0]), Some(0.0));
+        assert_eq!(cut([50.0, 0.0, 150.0, 100.0]), Some(0.5));
+        // Only the part on the photo counts: half of this box is above it, none outside x.
+        assert_eq!(cut([150.0, -100.0, 250.0, 100.0]), Some(0.0));
+        assert_eq!(cut([500.0, 0.0, 600.0, 100.0]), None);
+        let person = Person::from_box([20.0, 20.0, 120.0, 200.0], 400, 200);
+        assert_eq!(
+            frame(person, 400, 200, KEEP),
+            Some(Crop::around([20.0, 20.0, 120.0, 200.0]))
+        );
+    }
+
+    #[test]
     fn a_small_person_is_framed_closer() {
-        let crop = frame(&person(1000, 1000, [450, 400, 550, 600]), 1000, 1000, KEEP);
+        let crop = frame(person(1000, 1000, [450, 400, 550, 600]), 1000, 1000, KEEP);
         assert_eq!(
             crop,
             Some(Crop {
@@ -327,11 +390,11 @@ mod tests {
             })
         );
         // A person of a few pixels gets the smallest square reconstruction reads.
-        let tiny = frame(&person(1000, 1000, [500, 500, 510, 520]), 1000, 1000, KEEP);
+        let tiny = frame(person(1000, 1000, [500, 500, 510, 520]), 1000, 1000, KEEP);
         assert_eq!(tiny.map(|c| c.side), Some(MIN_SOURCE_SIDE));
         // At half the square's side or more, the square stays.
         assert_eq!(
-            frame(&person(1000, 1000, [300, 300, 700, 760]), 1000, 1000, KEEP),
+            frame(person(1000, 1000, [300, 300, 700, 760]), 1000, 1000, KEEP),
             None
         );
     }

@@ -587,16 +587,17 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// EHM-Tracker's keypoint models folder (the stand-in models of tests/data/dwpose) opened like
-/// any file: the Mode panel says the body and hand points now come from its DWPose, a photo
-/// without tracking is fitted to them (its label says so), and *MediaPipe's keypoints* goes back.
+/// EHM-Tracker's keypoint models folder (the oracle stand-ins of tests/data/dwpose_oracle: YOLOX
+/// finds nobody, DWPose answers MediaPipe's body points) opened like any file: the Mode panel
+/// says the body and hand points now come from its DWPose, a photo without tracking is fitted
+/// to them (its label says so), and *MediaPipe's keypoints* goes back.
 #[test]
 fn ehm_trackers_keypoint_models_place_the_fits_points() {
     let mut h = harness(Options::default());
     h.run();
     let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data");
     h.get_by_label("Keypoints: MediaPipe's models (shipped)");
-    h.state_mut().open(data.join("dwpose"));
+    h.state_mut().open(data.join("dwpose_oracle"));
     wait_for_status(&mut h, "EHM-Tracker's keypoint models");
     h.run();
     h.get_by_label_contains("Keypoints: body and hands from EHM-Tracker's DWPose");
@@ -605,7 +606,7 @@ fn ehm_trackers_keypoint_models_place_the_fits_points() {
     std::fs::create_dir_all(&dir).expect("dir");
     let label = reconstruct_demo_portrait(&mut h, &dir, "portrait.png");
     assert!(
-        label.contains("fitted to 11 keypoints of EHM-Tracker's DWPose"),
+        label.contains("fitted to 13 keypoints of EHM-Tracker's DWPose"),
         "{label}"
     );
     // The Body view's panel, short enough that the Mode buttons are on screen to click.
