@@ -16,8 +16,9 @@ use guava::tracking::Tracking;
 
 use crate::common::portrait_placed;
 
-fn temp_dir() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("guava-framing-{}", std::process::id()));
+/// A folder of the test `name`'s own (tests run in parallel in one process).
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("guava-framing-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     dir
 }
@@ -73,7 +74,7 @@ fn a_person_the_centred_square_cuts_or_shrinks_is_framed_and_fitted_in_place() {
     let (_, alone, view) = fit(Path::new("assets/demo_portrait.png"));
     assert_eq!(view.crop, None, "the portrait's own square stays");
     let reference = fitted_in_photo(&alone, None, [512, 512]);
-    let dir = temp_dir();
+    let dir = temp_dir("fit");
     for (name, size, at) in [
         ("wide.png", [1024, 512], [0, 0]),
         ("tall.png", [512, 1024], [0, 0]),
@@ -134,8 +135,7 @@ fn the_frame_travels_with_the_tracking_file() {
     let body = BodyModel::default_body().expect("body");
     let uv = UvMap::for_body(&body, DEFAULT_UV_SIZE);
     let mut models = Landmarkers::load(OnnxRuntime::load().expect("ONNX Runtime")).expect("models");
-    let dir = temp_dir().join("tracking");
-    std::fs::create_dir_all(&dir).expect("dir");
+    let dir = temp_dir("tracking");
     let photo = portrait_placed(&dir, "wide.png", [1024, 512], [0, 0]);
     let (fitted, _, view) = reconstruct_photo_file(
         &body,

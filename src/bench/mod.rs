@@ -7,7 +7,7 @@ mod splat;
 
 pub use body::{BodyBenchArgs, body};
 pub use guava::{GuavaBenchArgs, guava};
-pub use reconstruct::{ReconstructBenchArgs, reconstruct};
+pub use reconstruct::{ReconstructBenchArgs, portrait_placed, reconstruct};
 pub use splat::{SplatBenchArgs, splat};
 
 fn median(mut v: Vec<f64>) -> f64 {

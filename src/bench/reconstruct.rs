@@ -1,7 +1,8 @@
 //! `guava bench reconstruct`: the default reconstruction of a synthetic photo of the default body
 //! on one CPU thread, per stage (the UV map is built once per body and timed apart), then
-//! animating the avatar for one frame of the demo motion (posing + rigging its Gaussians), and
-//! the single-image fit of the demo portrait (also on an EHM body, through its linear body).
+//! animating the avatar for one frame of the demo motion (posing + rigging its Gaussians), the
+//! single-image fit of the demo portrait (also on an EHM body, through its linear body), and the
+//! cost of framing photos the centred square does not suit.
 
 use std::time::{Duration, Instant};
 
@@ -107,6 +108,7 @@ pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
         median(rig_ms)
     );
     fit_demo_portrait(&body, args.iterations)?;
+    framing_cost(args.iterations)?;
     if let Some(path) = &args.ehm {
         let ehm = EhmModel::load(path)?;
         let mut linearise_ms = Vec::new();
@@ -129,6 +131,61 @@ pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
     if let Some(dir) = &args.dwpose {
         wholebody_on_demo_portrait(dir, args.iterations)?;
     }
+    Ok(())
+}
+
+/// The demo portrait pasted at `at` on a `size` canvas of its background's grey: a photo where
+/// the centred square cuts the person, or leaves them small.
+pub fn portrait_placed(size: [u32; 2], at: [i64; 2]) -> anyhow::Result<image::RgbImage> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png");
+    let portrait = image::open(path)?.to_rgb8();
+    let mut photo = image::RgbImage::from_pixel(size[0], size[1], image::Rgb([150, 150, 160]));
+    image::imageops::replace(&mut photo, &portrait, at[0], at[1]);
+    Ok(photo)
+}
+
+/// Reading a photo for the fit (decoding, framing, every keypoint model on the chosen square)
+/// where the centred square will do (the demo portrait) and where it has to be reframed,
+/// side by side.
+fn framing_cost(iterations: usize) -> anyhow::Result<()> {
+    use crate::reconstruct::framing::{Framing, SourcePhoto, Square};
+    let dir = std::env::temp_dir().join(format!("guava-bench-framing-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let mut photos = vec![(
+        "demo portrait 512² (kept)".to_string(),
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png"),
+    )];
+    for (name, size, at) in [
+        ("portrait at the left of 1024×512", [1024, 512], [0, 0]),
+        ("portrait at the top of 512×1024", [512, 1024], [0, 0]),
+        ("portrait small in 1600²", [1600, 1600], [544, 700]),
+    ] {
+        let path = dir.join(format!("{}.png", photos.len()));
+        portrait_placed(size, at)?.save(&path)?;
+        photos.push((name.to_string(), path));
+    }
+    let mut models = Landmarkers::load(OnnxRuntime::load()?)?;
+    println!("reading a photo for the fit (decode, frame, every keypoint model), medians:");
+    let mut baseline = None;
+    for (name, path) in &photos {
+        let mut times = Vec::new();
+        let mut crop = None;
+        for i in 0..iterations.min(10) + 1 {
+            let t = Instant::now();
+            let square = Square::Fitted(Framing::KeepCentred);
+            crop = SourcePhoto::read(path, square, Some(&mut models), false, &mut |_| true)?.crop;
+            if i > 0 {
+                times.push(ms(t.elapsed()));
+            }
+        }
+        let time = median(times);
+        let base = *baseline.get_or_insert(time);
+        let framed = crop.map_or("centred square".into(), |c| {
+            format!("framed {}² at ({}, {})", c.side, c.left, c.top)
+        });
+        println!("  {name:34} {time:7.1} ms  {:4.2}×  {framed}", time / base);
+    }
+    std::fs::remove_dir_all(&dir).ok();
     Ok(())
 }
 

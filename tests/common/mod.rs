@@ -155,23 +155,17 @@ pub fn avatar_header_end(bytes: &[u8]) -> usize {
         .0
 }
 
-/// The demo portrait pasted at `at` on a `size` canvas of its background's grey, written as a
-/// PNG `name` in `dir` (a photo where the portrait is off-centre, or small).
+/// [`guava::bench::portrait_placed`] written as a PNG `name` in `dir`.
 pub fn portrait_placed(
     dir: &std::path::Path,
     name: &str,
     size: [u32; 2],
     at: [i64; 2],
 ) -> std::path::PathBuf {
-    let portrait = image::open(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/assets/demo_portrait.png"
-    ))
-    .expect("portrait")
-    .to_rgb8();
-    let mut photo = image::RgbImage::from_pixel(size[0], size[1], image::Rgb([150, 150, 160]));
-    image::imageops::replace(&mut photo, &portrait, at[0], at[1]);
     let path = dir.join(name);
-    photo.save(&path).expect("save");
+    guava::bench::portrait_placed(size, at)
+        .expect("portrait")
+        .save(&path)
+        .expect("save");
     path
 }
