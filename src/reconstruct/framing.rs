@@ -3,7 +3,8 @@
 //! with EHM-Tracker's body crop ([`Crop::around`], padded where it passes the photo's edges), as
 //! GUAVA's networks learned from such crops; in default mode the centred square is kept when it
 //! holds the whole person at a useful size, so a photo its user framed stays as it is. The
-//! person is the photo's alpha, else the pose model's mask.
+//! person is the photo's alpha, else EHM-Tracker's YOLOX box when its models are loaded, else
+//! the pose model's mask.
 
 use std::path::Path;
 
