@@ -547,7 +547,6 @@ fn fit(
         image,
         Square::Fitted(framing),
         Some(&mut models),
-        true,
         &mut |_| true,
     )?;
     let (source, found) = (

@@ -382,7 +382,6 @@ fn ehm_trackers_person_box_frames_the_photo() {
         &data("assets/demo_portrait.png"),
         Square::Fitted(Framing::AroundPerson),
         Some(&mut landmarkers),
-        false,
         &mut |_| true,
     )
     .expect("reads");

@@ -173,7 +173,7 @@ fn framing_cost(iterations: usize) -> anyhow::Result<()> {
         for i in 0..iterations.min(10) + 1 {
             let t = Instant::now();
             let square = Square::Fitted(Framing::KeepCentred);
-            crop = SourcePhoto::read(path, square, Some(&mut models), false, &mut |_| true)?.crop;
+            crop = SourcePhoto::read(path, square, Some(&mut models), &mut |_| true)?.crop;
             if i > 0 {
                 times.push(ms(t.elapsed()));
             }

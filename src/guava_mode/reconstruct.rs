@@ -268,9 +268,12 @@ pub fn reconstruct_guava_file(
     let square = given
         .as_ref()
         .map_or(Square::Fitted(Framing::AroundPerson), |(view, _)| {
-            Square::Tracked(view.crop)
+            Square::Tracked {
+                crop: view.crop,
+                points: false,
+            }
         });
-    let read = SourcePhoto::read(photo, square, landmarkers.as_deref_mut(), false, progress)?;
+    let read = SourcePhoto::read(photo, square, landmarkers.as_deref_mut(), progress)?;
     let size = models.dims.image as u32;
     let mut image =
         SourceImage::from_rgba_at(&read.pixels, read.crop, read.has_alpha, &file, size)?;

@@ -83,8 +83,9 @@ pub enum Framing {
 /// Which square of the photo is read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Square {
-    /// A tracked view's crop (`None`: the centred square).
-    Tracked(Option<Crop>),
+    /// A tracked view's crop (`None`: the centred square); `points` runs the pose model for
+    /// the points the viewer shows even when the photo's alpha is the mask.
+    Tracked { crop: Option<Crop>, points: bool },
     /// Framed around the person the keypoint models find, then fitted.
     Fitted(Framing),
 }
@@ -162,22 +163,21 @@ pub struct SourcePhoto {
 
 impl SourcePhoto {
     /// Reads `photo`'s `square`. A tracked square is read as it is, and the pose model alone
-    /// runs when `models` are given and the photo has no alpha (for the person mask) or
-    /// `points` asks (the points the viewer shows). A fitted one is framed around the person
+    /// runs when `models` are given and the photo has no alpha (for the person mask) or the
+    /// square asks for its points. A fitted one is framed around the person
     /// `models` find ([`frame`]), and every keypoint model runs on the chosen square.
     /// `progress` hears [`Stage::Fit`] before each model run.
     pub fn read(
         photo: &Path,
         square: Square,
         models: Option<&mut Landmarkers>,
-        points: bool,
         progress: &mut dyn FnMut(Stage) -> bool,
     ) -> Result<Self, ReconstructError> {
         let file = photo.display().to_string();
         let (pixels, has_alpha) = SourceImage::decode(photo)?;
         let read = |crop| SourceImage::from_rgba_at(&pixels, crop, has_alpha, &file, SOURCE_SIZE);
         let (crop, image, detections) = match (square, models) {
-            (Square::Tracked(crop), models) => {
+            (Square::Tracked { crop, points }, models) => {
                 let image = read(crop)?;
                 let detections = match models.filter(|_| points || !has_alpha) {
                     Some(models) => {
@@ -191,7 +191,7 @@ impl SourcePhoto {
             }
             (Square::Fitted(framing), Some(models)) => {
                 let (crop, image, found) =
-                    Self::fit(&pixels, has_alpha, &file, framing, models, progress)?;
+                    Self::fit(&pixels, has_alpha, &read, framing, models, progress)?;
                 (crop, image, Some(found))
             }
             (Square::Fitted(_), None) => {
@@ -215,16 +215,16 @@ impl SourcePhoto {
     /// crops), else the pose model's mask. On a square photo that look is the full detection on
     /// its centred square, run again only on a reframed square; on another the person is looked
     /// for first, and every model runs on the square they are framed in.
+    /// `read` makes the source image of a square of `pixels`.
     fn fit(
         pixels: &RgbaImage,
         has_alpha: bool,
-        file: &str,
+        read: &dyn Fn(Option<Crop>) -> Result<SourceImage, ReconstructError>,
         framing: Framing,
         models: &mut Landmarkers,
         progress: &mut dyn FnMut(Stage) -> bool,
     ) -> Result<(Option<Crop>, SourceImage, Detections), ReconstructError> {
         let (width, height) = pixels.dimensions();
-        let read = |crop| SourceImage::from_rgba_at(pixels, crop, has_alpha, file, SOURCE_SIZE);
         let crop = if has_alpha {
             let person = Person::from_mask(&PersonMask::alpha(pixels), width, height);
             frame(person, width, height, framing)

@@ -327,7 +327,7 @@ pub fn reconstruct_photo_file(
     let file = photo.display().to_string();
     let started = Instant::now();
     // A given pose runs the pose model too, so the viewer can show its keypoints against the pose.
-    let points = !matches!(tracked, Tracked::File(_));
+    let points = matches!(tracked, Tracked::Given(_));
     let given = match tracked {
         Tracked::File(path) => {
             let name = path.display().to_string();
@@ -345,11 +345,11 @@ pub fn reconstruct_photo_file(
         photo,
         given
             .as_ref()
-            .map_or(Square::Fitted(Framing::KeepCentred), |v| {
-                Square::Tracked(v.crop)
+            .map_or(Square::Fitted(Framing::KeepCentred), |v| Square::Tracked {
+                crop: v.crop,
+                points,
             }),
         landmarkers.as_deref_mut(),
-        points,
         progress,
     )?;
     let mut image = read.image;
