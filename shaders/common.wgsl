@@ -63,14 +63,18 @@ fn flat_id(wid: vec3<u32>, nwg: vec3<u32>, lid: u32, wg_size: u32) -> u32 {
 }
 
 // Whether a splat at `xy` (pixel coordinates) with conic (A, B, C) and opacity o can reach
-// α ≥ 1/255 at any pixel of `tile`. α = o·exp(−q/2) with q = A dx² + 2B dx dy + C dy², so the
-// tile is reached iff the least q over its pixels is at most 2 ln(255 o); the least q over the
-// tile's square of pixel positions (its centre inside → 0, else on one of the four edges, each a
-// clamped 1D minimum) is at most that over its pixels. A 1e-3 margin on q (α 0.05 % under the
-// threshold) covers the rasterizer's f32 rounding, so leaving a tile out never changes a pixel.
+// α ≥ 1/255 at any pixel of `tile`.
 fn tile_reached(xy: vec2<f32>, conic_opacity: vec4<f32>, tile: vec2<u32>) -> bool {
     let lo = vec2<f32>(tile * TILE_SIZE);
-    let hi = lo + f32(TILE_SIZE - 1u);
+    return rect_reached(xy, conic_opacity, lo, lo + f32(TILE_SIZE - 1u));
+}
+
+// The same for the pixels with positions in [lo, hi]. α = o·exp(−q/2) with
+// q = A dx² + 2B dx dy + C dy², so a pixel is reached iff its q is at most 2 ln(255 o); the least q
+// over the rectangle of pixel positions (its centre inside → 0, else on one of the four edges, each
+// a clamped 1D minimum) is at most that over its pixels. A 1e-3 margin on q (α 0.05 % under the
+// threshold) covers the rasterizer's f32 rounding, so leaving a pixel out never changes it.
+fn rect_reached(xy: vec2<f32>, conic_opacity: vec4<f32>, lo: vec2<f32>, hi: vec2<f32>) -> bool {
     if all(xy >= lo) && all(xy <= hi) {
         return true;
     }
@@ -83,7 +87,7 @@ fn tile_reached(xy: vec2<f32>, conic_opacity: vec4<f32>, tile: vec2<u32>) -> boo
     let d_hi = xy - lo;
     var q_min = 3.4e38;
     for (var e = 0u; e < 2u; e++) {
-        // Edges at fixed dx (the tile's left and right columns) and at fixed dy.
+        // Edges at fixed dx (the left and right columns) and at fixed dy.
         let dx = select(d_lo.x, d_hi.x, e == 1u);
         let dy_star = clamp(-b * dx / c, d_lo.y, d_hi.y);
         q_min = min(q_min, a * dx * dx + 2.0 * b * dx * dy_star + c * dy_star * dy_star);

@@ -451,12 +451,16 @@ fn avatar_file_round_trips_bit_identically_and_names_bad_fields() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// The rasterizer's thread layouts agree on a dense real scene: an avatar waving in the demo
-/// motion, seen whole at 768×700 (the synthetic test clouds are sparser; a layout of 16 pixels per
-/// thread once drew one tile of the demo portrait's avatar wrong on lavapipe and is not offered).
+/// The rasterizer's tunings agree on a dense real scene: an avatar waving in the demo motion, seen
+/// whole at 768×700 (768 is no multiple of the 16-pixel tile, so edge tiles hold pixels outside the
+/// image), with its 4 channels and with 32 (its features repeated, scaled per copy).
+/// Skipping the Gaussians that miss a block of threads (CPU adapters) must change no pixel: one it
+/// left out that reaches a pixel at α ≥ 1/255 would change it, and the rest is the same arithmetic
+/// in the same order, so the images must be identical to the bit. Other layouts sum the same terms
+/// in the same order per pixel: equal up to fused-multiply rounding.
 #[test]
-fn thread_layouts_agree_on_an_animated_avatar() {
-    use guava::render::{HeadlessRenderer, RasterTuning};
+fn raster_tunings_agree_on_an_animated_avatar() {
+    use guava::render::{HeadlessRenderer, RasterTuning, SplatImage};
     let body = body();
     let (view, image) = rest_photo();
     let (avatar, _) = reconstruct(&view, &image).expect("reconstruct");
@@ -464,21 +468,48 @@ fn thread_layouts_agree_on_an_animated_avatar() {
     let mut pose = BodyPose::rest(body);
     guava::tracking::Retarget::new(&motion, body).sample(&motion, 6.45, &mut pose);
     let cloud = cloud_for(&avatar, &pose);
+    let mut wide = cloud.clone();
+    wide.channels = 32;
+    wide.features = cloud
+        .features
+        .chunks(cloud.channels)
+        .flat_map(|f| {
+            (0..8).flat_map(move |copy| f.iter().map(move |v| v * (1.0 - 0.1 * copy as f32)))
+        })
+        .collect();
     let fov = 40f32.to_radians();
     let look = guava::camera::orbit_view(&cloud, fov, 0.3, -0.1, true).expect("framed");
     let camera = Camera::from_fov_y(look, 768, 700, fov);
-    let renders: Vec<_> = [1, 4, 8]
-        .map(|p| {
-            let gpu = guava::gpu::GpuContext::headless().expect("adapter");
-            let mut r = HeadlessRenderer::with_tuning(gpu, RasterTuning::PixelsPerThread(p));
-            (p, r.render(&cloud, &camera, &[0.0; 4]).expect("fits").0)
-        })
-        .into();
-    for (p, render) in &renders[1..] {
-        let d = crate::common::diff(render, &renders[0].1);
-        println!("{p} pixels per thread vs 1: {d:?}");
-        // The same sums in the same order per pixel: equal up to fused-multiply rounding.
-        assert!(d.max_abs <= 1e-5, "{p} pixels per thread: {d:?}");
+    let render = |cloud: &guava::gaussians::GaussianCloud, tuning| {
+        let gpu = guava::gpu::GpuContext::headless().expect("adapter");
+        let mut r = HeadlessRenderer::with_tuning(gpu, tuning);
+        r.render(cloud, &camera, &vec![0.0; cloud.channels])
+            .expect("fits")
+            .0
+    };
+    let differing = |a: &SplatImage, b: &SplatImage| {
+        let count = |x: &[f32], y: &[f32]| x.iter().zip(y).filter(|(u, v)| u != v).count();
+        count(&a.features, &b.features)
+            + count(&a.alpha, &b.alpha)
+            + count(&a.inv_depth, &b.inv_depth)
+    };
+    for cloud in [&cloud, &wide] {
+        let c = cloud.channels;
+        let one = render(cloud, RasterTuning::Lockstep(1));
+        assert!(one.alpha.iter().any(|&a| a > 0.5), "the avatar is drawn");
+        let cpu = render(cloud, RasterTuning::Cpu);
+        let same_layout = RasterTuning::Lockstep(RasterTuning::Cpu.pixels_per_thread(c as u32));
+        let differ = differing(&cpu, &render(cloud, same_layout));
+        println!("{c} channels: skipping vs {same_layout:?}: {differ} values differ");
+        assert_eq!(differ, 0, "{c} channels: skipping changed the image");
+        for p in [2, 4, 8] {
+            let d = crate::common::diff(&render(cloud, RasterTuning::Lockstep(p)), &one);
+            println!("{c} channels: {p} pixels per thread vs 1: {d:?}");
+            assert!(
+                d.max_abs <= 1e-5,
+                "{c} channels, {p} pixels per thread: {d:?}"
+            );
+        }
     }
 }
 

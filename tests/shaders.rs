@@ -24,18 +24,21 @@ fn every_pass_validates() {
     for (name, _, _) in shader::ALL {
         module(name);
     }
-    // The rasterizer at the channel counts and thread layouts we use and the bounds we support.
+    // The rasterizer at the channel counts, layouts and tunings we use and the bounds we support.
     for c in [1, 3, 32, 64] {
-        for p in [1, 2, 4, 8, 16] {
-            let src = shader::compose(shader::RASTERIZE, &[("CHANNELS", c), ("PIXELS", p)]);
-            let module = naga::front::wgsl::parse_str(&src)
-                .unwrap_or_else(|e| panic!("rasterize C={c} P={p}: {e}"));
-            naga::valid::Validator::new(
-                naga::valid::ValidationFlags::all(),
-                naga::valid::Capabilities::all(),
-            )
-            .validate(&module)
-            .unwrap_or_else(|e| panic!("rasterize C={c} P={p}: {e:?}"));
+        for p in [1, 2, 4, 8] {
+            for skip in [0, 1] {
+                let consts = [("CHANNELS", c), ("PIXELS", p), ("SKIP_MISSED", skip)];
+                let src = shader::compose(shader::RASTERIZE, &consts);
+                let module = naga::front::wgsl::parse_str(&src)
+                    .unwrap_or_else(|e| panic!("rasterize {consts:?}: {e}"));
+                naga::valid::Validator::new(
+                    naga::valid::ValidationFlags::all(),
+                    naga::valid::Capabilities::all(),
+                )
+                .validate(&module)
+                .unwrap_or_else(|e| panic!("rasterize {consts:?}: {e:?}"));
+            }
         }
     }
 }

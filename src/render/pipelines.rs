@@ -75,24 +75,24 @@ fn compute_pipeline(
     })
 }
 
-/// How the rasterizer maps pixels to threads. One pixel per thread is the usual GPU layout. On
-/// CPU adapters (lavapipe) a load from workgroup memory costs far more than the arithmetic, so
-/// each thread shades several pixels of a column and reuses every Gaussian it loads; but the
-/// per-pixel accumulators then multiply, which costs more than it saves for many channels.
-/// Measured on lavapipe (`guava bench splat`): 10k Gaussians, 512², 3 channels 813 → 342 ms
-/// rasterizing with 4 pixels per thread; 150k, 512², 3 channels, frames of 1,453–1,501 ms with 4,
-/// 1,307–1,324 with 8; 32 channels fastest with 1 (2 per thread: 8,110–8,199 ms against
-/// 6,374–6,558). 16 (a whole column per thread, 1,156–1,234 ms) drew one tile of the demo
-/// portrait's avatar wrong on lavapipe (rows 1–15 of a tile; cause not found), so it is not used.
-/// Once up to four channels rode with the batch in workgroup memory, 8 lost its edge: 150k, 512²,
-/// 3 channels rasterize in 105–118 ms with 4 and 105–115 with 8, and 4 channels (the default
-/// avatars) in 92–101 ms with 4 against 174–190 with 8 (the accumulators of 8 pixels × 4
-/// channels no longer fit), so 4 is the CPU layout up to four channels.
+/// How the rasterizer maps pixels to threads and walks a tile's batched Gaussians
+/// (shaders/rasterize.wgsl). One pixel per thread, every thread reading every Gaussian, is the
+/// usual GPU layout: a warp skips the blending none of its threads needs.
+///
+/// On a CPU adapter (lavapipe) a branch skips nothing: each SIMD row of 8 threads runs the loop
+/// body for every Gaussian with its lanes masked, and a load from workgroup memory costs far more
+/// than the arithmetic. So there each block of 8 threads steps over the Gaussians that reach none
+/// of its pixels (found once per batched Gaussian), and up to four channels each thread shades 4
+/// pixels and reuses every Gaussian it loads (with more channels the accumulators of several
+/// pixels no longer fit in registers). Measured on lavapipe, 150k Gaussians at 512² (`guava bench
+/// splat`, side by side with the layout before, which had no skipping and gave each thread pixels
+/// of a column spaced apart): rasterizing 32 channels ×0.51–0.53, 3 channels ×0.57–0.63; one pixel
+/// per thread rasterized 3 channels 1.35–2.4× slower than 4 (README, Performance).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RasterTuning {
-    /// The same count for every channel count: 1, 2, 4, 8 or 16 (divisors of the tile side).
-    PixelsPerThread(u32),
-    /// 4 pixels per thread up to 4 channels, 1 above.
+    /// This many pixels per thread (1, 2, 4 or 8), every thread reading every batched Gaussian.
+    Lockstep(u32),
+    /// CPU adapters: 4 pixels per thread up to four channels, 1 above, skipping Gaussians per block.
     Cpu,
 }
 
@@ -101,16 +101,20 @@ impl RasterTuning {
         if info.device_type == wgpu::DeviceType::Cpu {
             Self::Cpu
         } else {
-            Self::PixelsPerThread(1)
+            Self::Lockstep(1)
         }
     }
 
     pub fn pixels_per_thread(self, channels: u32) -> u32 {
         match self {
-            Self::PixelsPerThread(p) => p,
+            Self::Lockstep(p) => p,
             Self::Cpu if channels <= 4 => 4,
             Self::Cpu => 1,
         }
+    }
+
+    pub fn skips_missed(self) -> bool {
+        self == Self::Cpu
     }
 }
 
@@ -137,10 +141,11 @@ pub struct SplatPipelines {
 
 impl SplatPipelines {
     pub fn new(device: &wgpu::Device, tuning: RasterTuning) -> Self {
-        if let RasterTuning::PixelsPerThread(p) = tuning {
+        if let RasterTuning::Lockstep(p) = tuning {
             assert!(
-                [1, 2, 4, 8, 16].contains(&p),
-                "pixels per thread must divide the tile side: {p}"
+                [1, 2, 4, 8].contains(&p),
+                "pixels per thread must be 1, 2, 4 or 8 (a block of 8 threads is 4 × 2·p pixels \
+                 of the 16-pixel tile): {p}"
             );
         }
         use Binding::{Storage, Uniform};
@@ -289,8 +294,13 @@ impl SplatPipelines {
             .entry(channels)
             .or_insert_with(|| {
                 let pixels = self.tuning.pixels_per_thread(channels);
-                let label = format!("Splat::rasterize[C={channels},P={pixels}]");
-                let consts = [("CHANNELS", channels), ("PIXELS", pixels)];
+                let skip = u32::from(self.tuning.skips_missed());
+                let label = format!("Splat::rasterize[C={channels},P={pixels},skip={skip}]");
+                let consts = [
+                    ("CHANNELS", channels),
+                    ("PIXELS", pixels),
+                    ("SKIP_MISSED", skip),
+                ];
                 let m = shader::module(device, &label, shader::RASTERIZE, &consts);
                 compute_pipeline(device, &label, &self.rasterize_layout, &m, "main")
             })

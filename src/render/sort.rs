@@ -163,7 +163,7 @@ mod tests {
         key_bits: u32,
     ) -> (Vec<u32>, Vec<u32>) {
         let (device, queue) = (&gpu.device, &gpu.queue);
-        let pipes = SplatPipelines::new(device, crate::render::RasterTuning::PixelsPerThread(1));
+        let pipes = SplatPipelines::new(device, crate::render::RasterTuning::Lockstep(1));
         let mut padded = keys.to_vec();
         padded.resize(capacity as usize, 0xdead_beef);
         let vals: Vec<u32> = (0..capacity).collect();
