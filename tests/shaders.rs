@@ -8,14 +8,19 @@ use wgpu::naga;
 
 fn module(name: &str) -> naga::Module {
     let (_, src, consts) = shader::ALL.iter().find(|(n, _, _)| *n == name).expect(name);
+    validated(name, src, consts)
+}
+
+/// A pass with its constants, parsed and validated (panics naming `label` otherwise).
+fn validated(label: &str, src: &str, consts: &[(&str, u32)]) -> naga::Module {
     let module = naga::front::wgsl::parse_str(&shader::compose(src, consts))
-        .unwrap_or_else(|e| panic!("{name}: {e}"));
+        .unwrap_or_else(|e| panic!("{label}: {e}"));
     naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
         naga::valid::Capabilities::all(),
     )
     .validate(&module)
-    .unwrap_or_else(|e| panic!("{name}: {e:?}"));
+    .unwrap_or_else(|e| panic!("{label}: {e:?}"));
     module
 }
 
@@ -29,15 +34,7 @@ fn every_pass_validates() {
         for p in [1, 2, 4, 8] {
             for skip in [0, 1] {
                 let consts = [("CHANNELS", c), ("PIXELS", p), ("SKIP_MISSED", skip)];
-                let src = shader::compose(shader::RASTERIZE, &consts);
-                let module = naga::front::wgsl::parse_str(&src)
-                    .unwrap_or_else(|e| panic!("rasterize {consts:?}: {e}"));
-                naga::valid::Validator::new(
-                    naga::valid::ValidationFlags::all(),
-                    naga::valid::Capabilities::all(),
-                )
-                .validate(&module)
-                .unwrap_or_else(|e| panic!("rasterize {consts:?}: {e:?}"));
+                validated(&format!("rasterize {consts:?}"), shader::RASTERIZE, &consts);
             }
         }
     }
