@@ -495,15 +495,23 @@ fn raster_tunings_agree_on_an_animated_avatar() {
     };
     for cloud in [&cloud, &wide] {
         let c = cloud.channels;
-        let one = render(cloud, RasterTuning::Lockstep(1));
+        // Each lockstep layout rendered once: 1, 2, 4 and 8 pixels per thread.
+        let lockstep = [1, 2, 4, 8].map(|p| (p, render(cloud, RasterTuning::Lockstep(p))));
+        let one = &lockstep[0].1;
         assert!(one.alpha.iter().any(|&a| a > 0.5), "the avatar is drawn");
         let cpu = render(cloud, RasterTuning::Cpu);
-        let same_layout = RasterTuning::Lockstep(RasterTuning::Cpu.pixels_per_thread(c as u32));
-        let differ = differing(&cpu, &render(cloud, same_layout));
-        println!("{c} channels: skipping vs {same_layout:?}: {differ} values differ");
+        let cpu_pixels = RasterTuning::Cpu.pixels_per_thread(c as u32);
+        let same_layout = lockstep
+            .iter()
+            .find(|(p, _)| *p == cpu_pixels)
+            .expect("offered");
+        let differ = differing(&cpu, &same_layout.1);
+        println!(
+            "{c} channels: skipping vs lockstep at {cpu_pixels} pixels per thread: {differ} values differ"
+        );
         assert_eq!(differ, 0, "{c} channels: skipping changed the image");
-        for p in [2, 4, 8] {
-            let d = crate::common::diff(&render(cloud, RasterTuning::Lockstep(p)), &one);
+        for (p, render) in &lockstep[1..] {
+            let d = crate::common::diff(render, one);
             println!("{c} channels: {p} pixels per thread vs 1: {d:?}");
             assert!(
                 d.max_abs <= 1e-5,

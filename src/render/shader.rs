@@ -14,7 +14,8 @@ pub const MESH: &str = include_str!("../../shaders/mesh.wgsl");
 /// `const NAME: u32 = value` lines prepended to a pass.
 pub type Consts = &'static [(&'static str, u32)];
 
-/// Every pass with the constants it needs to compile (CHANNELS = 3, PIXELS = 1 and SKIP_MISSED = 0 stand in for any).
+/// Every pass with the constants it needs to compile (CHANNELS = 3, PIXELS = 1 and
+/// SKIP_MISSED = 0 stand in for any).
 pub const ALL: &[(&str, &str, Consts)] = &[
     ("preprocess", PREPROCESS, &[]),
     ("scan", SCAN, &[]),
