@@ -3,10 +3,12 @@
 //! workgroup and stores the grand total, `scan_blocks` scans each block from its offset.
 //! Sums saturate at 0xffffffff: saturating addition is still associative, so a total too big to
 //! count (tile pairs of huge Gaussians) reads as "at least u32::MAX" instead of wrapping.
+//! Past-the-end items sit behind loop conditions, not `if`s: see radix_sort.wgsl.
 
-const SCAN_THREADS: u32 = 256u;
-const SCAN_ITEMS: u32 = 8u;
-const SCAN_BLOCK: u32 = 2048u;
+// Few threads with many items each, as in radix_sort.wgsl: fewer barrier rounds per block.
+const SCAN_THREADS: u32 = 32u;
+const SCAN_ITEMS: u32 = 64u;
+const SCAN_BLOCK: u32 = SCAN_THREADS * SCAN_ITEMS;
 
 struct ScanParams {
     count: u32,
@@ -47,16 +49,13 @@ fn workgroup_inclusive_scan(lid: u32, value: u32) -> u32 {
 fn thread_sum(block: u32, lid: u32) -> u32 {
     var sum = 0u;
     let start = block * SCAN_BLOCK + lid * SCAN_ITEMS;
-    for (var k = 0u; k < SCAN_ITEMS; k++) {
-        let idx = start + k;
-        if idx < params.count {
-            sum = sat_add(sum, data[idx]);
-        }
+    for (var k = 0u; k < SCAN_ITEMS && start + k < params.count; k++) {
+        sum = sat_add(sum, data[start + k]);
     }
     return sum;
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(SCAN_THREADS)
 fn reduce(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
@@ -69,34 +68,30 @@ fn reduce(
     }
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(SCAN_THREADS)
 fn scan_sums(@builtin(local_invocation_index) lid: u32) {
     let per_thread = (params.num_blocks + SCAN_THREADS - 1u) / SCAN_THREADS;
     let start = lid * per_thread;
     var sum = 0u;
-    for (var k = 0u; k < per_thread; k++) {
-        if start + k < params.num_blocks {
-            sum = sat_add(sum, block_sums[start + k]);
-        }
+    for (var k = 0u; k < per_thread && start + k < params.num_blocks; k++) {
+        sum = sat_add(sum, block_sums[start + k]);
     }
     let inclusive = workgroup_inclusive_scan(lid, sum);
     var running = 0u;
     if lid > 0u {
         running = partial[lid - 1u];
     }
-    for (var k = 0u; k < per_thread; k++) {
-        if start + k < params.num_blocks {
-            let v = block_sums[start + k];
-            block_sums[start + k] = running;
-            running = sat_add(running, v);
-        }
+    for (var k = 0u; k < per_thread && start + k < params.num_blocks; k++) {
+        let v = block_sums[start + k];
+        block_sums[start + k] = running;
+        running = sat_add(running, v);
     }
     if lid == SCAN_THREADS - 1u {
         totals[params.total_index] = inclusive;
     }
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(SCAN_THREADS)
 fn scan_blocks(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
@@ -113,12 +108,9 @@ fn scan_blocks(
         running = sat_add(running, partial[lid - 1u]);
     }
     let start = block * SCAN_BLOCK + lid * SCAN_ITEMS;
-    for (var k = 0u; k < SCAN_ITEMS; k++) {
-        let idx = start + k;
-        if idx < params.count {
-            let v = data[idx];
-            data[idx] = running;
-            running = sat_add(running, v);
-        }
+    for (var k = 0u; k < SCAN_ITEMS && start + k < params.count; k++) {
+        let v = data[start + k];
+        data[start + k] = running;
+        running = sat_add(running, v);
     }
 }
