@@ -62,26 +62,30 @@ fn flat_id(wid: vec3<u32>, nwg: vec3<u32>, lid: u32, wg_size: u32) -> u32 {
     return (wid.y * nwg.x + wid.x) * wg_size + lid;
 }
 
-// Whether a splat at `xy` (pixel coordinates) with conic (A, B, C) and opacity o can reach
-// α ≥ 1/255 at any pixel of `tile`.
-fn tile_reached(xy: vec2<f32>, conic_opacity: vec4<f32>, tile: vec2<u32>) -> bool {
-    let lo = vec2<f32>(tile * TILE_SIZE);
-    return rect_reached(xy, conic_opacity, lo, lo + f32(TILE_SIZE - 1u));
+// α = o·exp(−q/2) with q = A dx² + 2B dx dy + C dy², so a pixel is reached (α ≥ 1/255) iff its q is
+// at most 2 ln(255 o). A 1e-3 margin on q (α 0.05 % under the threshold) covers the rasterizer's
+// f32 rounding, so leaving a pixel out never changes it. Found once per splat, not per tile.
+fn reach_limit(opacity: f32) -> f32 {
+    return 2.0 * log(255.0 * opacity) + 1e-3;
 }
 
-// The same for the pixels with positions in [lo, hi]. α = o·exp(−q/2) with
-// q = A dx² + 2B dx dy + C dy², so a pixel is reached iff its q is at most 2 ln(255 o); the least q
-// over the rectangle of pixel positions (its centre inside → 0, else on one of the four edges, each
-// a clamped 1D minimum) is at most that over its pixels. A 1e-3 margin on q (α 0.05 % under the
-// threshold) covers the rasterizer's f32 rounding, so leaving a pixel out never changes it.
-fn rect_reached(xy: vec2<f32>, conic_opacity: vec4<f32>, lo: vec2<f32>, hi: vec2<f32>) -> bool {
+// Whether a splat at `xy` (pixel coordinates) with conic (A, B, C) and reach_limit `q_limit` can
+// reach α ≥ 1/255 at any pixel of `tile`.
+fn tile_reached(xy: vec2<f32>, conic_opacity: vec4<f32>, q_limit: f32, tile: vec2<u32>) -> bool {
+    let lo = vec2<f32>(tile * TILE_SIZE);
+    return rect_reached(xy, conic_opacity, q_limit, lo, lo + f32(TILE_SIZE - 1u));
+}
+
+// The same for the pixels with positions in [lo, hi]: the least q over the rectangle of pixel
+// positions (its centre inside → 0, else on one of the four edges, each a clamped 1D minimum) is
+// at most that over its pixels.
+fn rect_reached(xy: vec2<f32>, conic_opacity: vec4<f32>, q_limit: f32, lo: vec2<f32>, hi: vec2<f32>) -> bool {
     if all(xy >= lo) && all(xy <= hi) {
         return true;
     }
     let a = conic_opacity.x;
     let b = conic_opacity.y;
     let c = conic_opacity.z;
-    let q_limit = 2.0 * log(255.0 * conic_opacity.w) + 1e-3;
     // d = xy − pixel, as the rasterizer takes it: d spans [xy − hi, xy − lo] on each axis.
     let d_lo = xy - hi;
     let d_hi = xy - lo;

@@ -5,7 +5,8 @@
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> gaussians: array<Gaussian>;
-@group(0) @binding(2) var<storage, read> features: array<f32>;
+// Each Gaussian's features are zero-padded to a multiple of four channels (see the rasterizer).
+@group(0) @binding(2) var<storage, read> features: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> projected: array<Projected>;
 @group(0) @binding(4) var<storage, read_write> depth_keys: array<u32>;
 @group(0) @binding(5) var<storage, read_write> depth_order: array<u32>;
@@ -44,10 +45,12 @@ fn main(
     var finite = is_finite(g.pos.x) && is_finite(g.pos.y) && is_finite(g.pos.z) && is_finite(g.opacity)
         && is_finite(g.rot.x) && is_finite(g.rot.y) && is_finite(g.rot.z) && is_finite(g.rot.w)
         && is_finite(g.scale.x) && is_finite(g.scale.y) && is_finite(g.scale.z);
-    // Each Gaussian's features are padded to a multiple of four (see the rasterizer).
-    let base = i * ((frame.channels + 3u) / 4u) * 4u;
-    for (var c = 0u; c < frame.channels; c++) {
-        finite = finite && is_finite(features[base + c]);
+    // Four channels per load; the loop ends at the first non-finite word (a loop, not an `if`,
+    // lets a CPU adapter's SIMD row stop early, see radix_sort.wgsl).
+    let words = (frame.channels + 3u) / 4u;
+    for (var q = 0u; q < words && finite; q++) {
+        let bits = bitcast<vec4<u32>>(features[i * words + q]) & vec4<u32>(0x7f800000u);
+        finite = all(bits != vec4<u32>(0x7f800000u));
     }
     if !finite {
         atomicAdd(&stats[STAT_NONFINITE], 1u);
@@ -117,10 +120,11 @@ fn main(
     let conic_opacity = vec4<f32>(conic, g.opacity);
     // The reference lists every tile of the 3σ rectangle; only those the splat can reach matter
     // (it still counts as visible when it reaches none, as in the reference).
+    let q_limit = reach_limit(g.opacity);
     var area = 0u;
     for (var ty = rmin.y; ty < rmax.y; ty++) {
         for (var tx = rmin.x; tx < rmax.x; tx++) {
-            area += u32(tile_reached(xy, conic_opacity, vec2<u32>(tx, ty)));
+            area += u32(tile_reached(xy, conic_opacity, q_limit, vec2<u32>(tx, ty)));
         }
     }
 

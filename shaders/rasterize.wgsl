@@ -68,10 +68,11 @@ fn block_pixel(lid: u32, k: u32) -> vec2<u32> {
 
 // The blocks of the tile at `origin` in which a splat can reach α ≥ 1/255 (rect_reached).
 fn blocks_reached(xy: vec2<f32>, conic_opacity: vec4<f32>, origin: vec2<u32>) -> u32 {
+    let q_limit = reach_limit(conic_opacity.w);
     var bits = 0u;
     for (var b = 0u; b < BLOCKS; b++) {
         let lo = vec2<f32>(origin + block_pixel(b * BLOCK_THREADS, 0u));
-        if rect_reached(xy, conic_opacity, lo, lo + vec2<f32>(f32(BLOCK_W - 1u), f32(BLOCK_H - 1u))) {
+        if rect_reached(xy, conic_opacity, q_limit, lo, lo + vec2<f32>(f32(BLOCK_W - 1u), f32(BLOCK_H - 1u))) {
             bits |= 1u << b;
         }
     }
