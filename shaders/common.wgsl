@@ -47,7 +47,8 @@ struct Projected {
     // Tile rectangle [min, max), x in the low 16 bits, y in the high 16.
     rect_min: u32,
     rect_max: u32,
-    _pad0: u32,
+    // reach_limit(opacity), found once in the preprocess for every reach test of this splat.
+    q_limit: f32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -57,6 +58,10 @@ fn is_finite(x: f32) -> bool {
     return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
 }
 
+fn all_finite(v: vec4<f32>) -> bool {
+    return all((bitcast<vec4<u32>>(v) & vec4<u32>(0x7f800000u)) != vec4<u32>(0x7f800000u));
+}
+
 // Dispatches larger than 65535 workgroups are split over y; this recovers the flat index.
 fn flat_id(wid: vec3<u32>, nwg: vec3<u32>, lid: u32, wg_size: u32) -> u32 {
     return (wid.y * nwg.x + wid.x) * wg_size + lid;
@@ -64,7 +69,7 @@ fn flat_id(wid: vec3<u32>, nwg: vec3<u32>, lid: u32, wg_size: u32) -> u32 {
 
 // α = o·exp(−q/2) with q = A dx² + 2B dx dy + C dy², so a pixel is reached (α ≥ 1/255) iff its q is
 // at most 2 ln(255 o). A 1e-3 margin on q (α 0.05 % under the threshold) covers the rasterizer's
-// f32 rounding, so leaving a pixel out never changes it. Found once per splat, not per tile.
+// f32 rounding, so leaving a pixel out never changes it.
 fn reach_limit(opacity: f32) -> f32 {
     return 2.0 * log(255.0 * opacity) + 1e-3;
 }

@@ -42,15 +42,13 @@ fn main(
     touched[i] = 0u;
 
     let g = gaussians[i];
-    var finite = is_finite(g.pos.x) && is_finite(g.pos.y) && is_finite(g.pos.z) && is_finite(g.opacity)
-        && is_finite(g.rot.x) && is_finite(g.rot.y) && is_finite(g.rot.z) && is_finite(g.rot.w)
-        && is_finite(g.scale.x) && is_finite(g.scale.y) && is_finite(g.scale.z);
+    var finite = all_finite(vec4<f32>(g.pos, g.opacity)) && all_finite(g.rot)
+        && all_finite(vec4<f32>(g.scale, 0.0));
     // Four channels per load; the loop ends at the first non-finite word (a loop, not an `if`,
     // lets a CPU adapter's SIMD row stop early, see radix_sort.wgsl).
     let words = (frame.channels + 3u) / 4u;
     for (var q = 0u; q < words && finite; q++) {
-        let bits = bitcast<vec4<u32>>(features[i * words + q]) & vec4<u32>(0x7f800000u);
-        finite = all(bits != vec4<u32>(0x7f800000u));
+        finite = all_finite(features[i * words + q]);
     }
     if !finite {
         atomicAdd(&stats[STAT_NONFINITE], 1u);
@@ -134,6 +132,7 @@ fn main(
     p.depth = t.z;
     p.rect_min = rmin.x | (rmin.y << 16u);
     p.rect_max = rmax.x | (rmax.y << 16u);
+    p.q_limit = q_limit;
     projected[i] = p;
     // Positive finite floats order like their bit patterns.
     depth_keys[i] = bitcast<u32>(t.z);

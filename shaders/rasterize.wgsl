@@ -67,8 +67,7 @@ fn block_pixel(lid: u32, k: u32) -> vec2<u32> {
 }
 
 // The blocks of the tile at `origin` in which a splat can reach α ≥ 1/255 (rect_reached).
-fn blocks_reached(xy: vec2<f32>, conic_opacity: vec4<f32>, origin: vec2<u32>) -> u32 {
-    let q_limit = reach_limit(conic_opacity.w);
+fn blocks_reached(xy: vec2<f32>, conic_opacity: vec4<f32>, q_limit: f32, origin: vec2<u32>) -> u32 {
     var bits = 0u;
     for (var b = 0u; b < BLOCKS; b++) {
         let lo = vec2<f32>(origin + block_pixel(b * BLOCK_THREADS, 0u));
@@ -125,7 +124,7 @@ fn main(
                 batch_features[lid] = features[id];
             }
             if SKIP_MISSED == 1u {
-                batch_blocks[lid] = blocks_reached(p.xy, p.conic_opacity, origin);
+                batch_blocks[lid] = blocks_reached(p.xy, p.conic_opacity, p.q_limit, origin);
             }
         }
         workgroupBarrier();

@@ -52,11 +52,10 @@ fn emit_keys(
     let p = projected[id];
     let rmin = vec2<u32>(p.rect_min & 0xffffu, p.rect_min >> 16u);
     let rmax = vec2<u32>(p.rect_max & 0xffffu, p.rect_max >> 16u);
-    let q_limit = reach_limit(p.conic_opacity.w);
     var off = pair_offsets[i];
     for (var y = rmin.y; y < rmax.y; y++) {
         for (var x = rmin.x; x < rmax.x; x++) {
-            if !tile_reached(p.xy, p.conic_opacity, q_limit, vec2<u32>(x, y)) {
+            if !tile_reached(p.xy, p.conic_opacity, p.q_limit, vec2<u32>(x, y)) {
                 continue;
             }
             // Pairs past the capacity are dropped; the host sees needed > kept and grows.
