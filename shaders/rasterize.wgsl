@@ -8,10 +8,13 @@
 //! Pixels go to threads in blocks of 4 × 2·PIXELS, 8 consecutive invocations each (block_pixel):
 //! one SIMD row of a CPU adapter shades a compact block, which fewer splats reach than a row; a GPU
 //! warp of 32 at PIXELS = 1 still covers 16×2 pixels.
-//! With SKIP_MISSED = 1 (CPU adapters) each block's threads step over the batched Gaussians that
-//! reach none of the block's pixels: there a branch skips no work (a SIMD row runs the loop body
-//! for every Gaussian with its lanes masked), but a loop that all of a row's lanes leave is left.
-//! The skipped ones would fail the α test at every pixel of the block, so no pixel changes.
+//! With SKIP_MISSED = 1 (CPU adapters) each block walks only the batched Gaussians that reach one
+//! of its pixels, from a bit mask per block: there a branch skips no work (a SIMD row runs the
+//! loop body for every Gaussian with its lanes masked), but a loop that all of a row's lanes leave
+//! is left. The skipped ones would fail the α test at every pixel of the block, so no pixel changes.
+//! How a thread reads a batched Gaussian (load_batched, hold_features, feature_word, block_done)
+//! comes from rasterize_fetch_loads.wgsl or, on CPU adapters with 8-lane subgroups,
+//! rasterize_fetch_shuffles.wgsl, composed before this file.
 //! Writes CHANNELS layers of an r32float texture array (the reference's [C, H, W]) plus accumulated
 //! alpha and expected inverse depth as two layers of another. Textures, not buffers: a 4096² image of
 //! 32 channels is 2 GiB, beyond what adapters bind as one storage buffer (128 MiB on lavapipe).
@@ -41,20 +44,38 @@ const BLOCK_H: u32 = 2u * PIXELS;
 const BLOCKS_PER_ROW: u32 = TILE_SIZE / BLOCK_W;
 const BLOCKS: u32 = THREADS / BLOCK_THREADS;
 
-// Per batched Gaussian, two vec4 loads in the per-pixel loop instead of four (each load from
-// workgroup memory is the expensive part on CPU adapters): (x, y, 1/depth as bits, id) and
-// (conic, opacity). Floats ride as u32 bits, not the id as float bits: small ids are subnormal
-// floats, which some GPUs flush to zero.
-var<workgroup> batch_xy_depth_id: array<vec4<u32>, BATCH>;
-var<workgroup> batch_conic_opacity: array<vec4<f32>, BATCH>;
-// Up to four feature channels ride with the batch: one vec4 load per Gaussian and thread from
-// workgroup memory instead of one from the storage buffer.
+// Per batched Gaussian BATCH_VECS vec4s of workgroup memory: (x, y, 1/depth as bits, id),
+// (conic, opacity) and, up to four channels, the features (one load per Gaussian and thread
+// instead of one from the storage buffer per pixel). Floats ride as u32 bits, not the id as float
+// bits: small ids are subnormal floats, which some GPUs flush to zero.
 const PACKED: bool = CHANNELS <= 4u;
-var<workgroup> batch_features: array<vec4<f32>, BATCH>;
-// With SKIP_MISSED: bit b set if the batched Gaussian reaches a pixel of block b.
+const BATCH_VECS: u32 = select(2u, 3u, PACKED);
+var<workgroup> batch: array<vec4<u32>, BATCH * BATCH_VECS>;
+// With SKIP_MISSED: per batched Gaussian, bit b set if it reaches a pixel of block b; then per
+// block, MASK_WORDS words whose bit i is set if batched Gaussian 32·word + i reaches it.
+const MASK_WORDS: u32 = BATCH / 32u;
 var<workgroup> batch_blocks: array<u32, BATCH>;
+var<workgroup> block_masks: array<u32, BLOCKS * MASK_WORDS>;
 var<workgroup> num_done: atomic<u32>;
 var<workgroup> done_snapshot: u32;
+
+struct Batched {
+    xy: vec2<f32>,
+    inv_depth: f32,
+    id: u32,
+    conic_opacity: vec4<f32>,
+    packed_features: vec4<f32>,
+}
+
+fn batched_from(first: vec4<u32>, second: vec4<u32>, features: vec4<u32>) -> Batched {
+    return Batched(
+        bitcast<vec2<f32>>(first.xy),
+        bitcast<f32>(first.z),
+        first.w,
+        bitcast<vec4<f32>>(second),
+        bitcast<vec4<f32>>(features),
+    );
+}
 
 // Pixel k of invocation `lid` in its tile: block lid / 8, blocks row-major over the tile.
 fn block_pixel(lid: u32, k: u32) -> vec2<u32> {
@@ -78,6 +99,20 @@ fn blocks_reached(xy: vec2<f32>, conic_opacity: vec4<f32>, q_limit: f32, origin:
     return bits;
 }
 
+// Turns the per-Gaussian block bits into per-block masks over the batch: one word per thread
+// (a loop, so the SIMD rows past the BLOCKS · MASK_WORDS words leave at once on CPU adapters).
+fn build_block_masks(lid: u32) {
+    for (var m = lid; m < BLOCKS * MASK_WORDS; m += THREADS) {
+        let block = m / MASK_WORDS;
+        let first = (m % MASK_WORDS) * 32u;
+        var bits = 0u;
+        for (var i = 0u; i < 32u; i++) {
+            bits |= ((batch_blocks[first + i] >> block) & 1u) << i;
+        }
+        block_masks[m] = bits;
+    }
+}
+
 @compute @workgroup_size(THREADS)
 fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -85,7 +120,8 @@ fn main(
 ) {
     let origin = wid.xy * TILE_SIZE;
     let range = ranges[wid.y * frame.tiles.x + wid.x];
-    let block_bit = 1u << (lid / BLOCK_THREADS);
+    let block = lid / BLOCK_THREADS;
+    let lane = lid % BLOCK_THREADS;
 
     var acc: array<vec4<f32>, PIXELS * FEATURE_WORDS>;
     var t: array<f32, PIXELS>;
@@ -96,12 +132,11 @@ fn main(
         let pix = origin + block_pixel(lid, k);
         t[k] = 1.0;
         done[k] = pix.x >= frame.size.x || pix.y >= frame.size.y;
-        if done[k] {
-            atomicAdd(&num_done, 1u);
-        } else {
+        if !done[k] {
             pending += 1u;
         }
     }
+    atomicAdd(&num_done, PIXELS - pending);
 
     var start = range.x;
     loop {
@@ -115,44 +150,61 @@ fn main(
             break;
         }
         let fetch = start + lid;
+        var reach = 0u;
         if fetch < range.y {
             let id = tile_vals[fetch];
             let p = projected[id];
-            batch_xy_depth_id[lid] = vec4<u32>(bitcast<vec2<u32>>(p.xy), bitcast<u32>(1.0 / p.depth), id);
-            batch_conic_opacity[lid] = p.conic_opacity;
+            batch[lid * BATCH_VECS] = vec4<u32>(bitcast<vec2<u32>>(p.xy), bitcast<u32>(1.0 / p.depth), id);
+            batch[lid * BATCH_VECS + 1u] = bitcast<vec4<u32>>(p.conic_opacity);
             if PACKED {
-                batch_features[lid] = features[id];
+                batch[lid * BATCH_VECS + 2u] = bitcast<vec4<u32>>(features[id]);
             }
             if SKIP_MISSED == 1u {
-                batch_blocks[lid] = blocks_reached(p.xy, p.conic_opacity, p.q_limit, origin);
+                reach = blocks_reached(p.xy, p.conic_opacity, p.q_limit, origin);
             }
+        }
+        if SKIP_MISSED == 1u {
+            batch_blocks[lid] = reach;
+            workgroupBarrier();
+            build_block_masks(lid);
         }
         workgroupBarrier();
         let n = min(BATCH, range.y - start);
-        var j = 0u;
+        let pending_before = pending;
+        // The walk: with SKIP_MISSED the set bits of this block's masks, else every batched Gaussian.
+        var mask_word = 0u;
+        var bits = 0u;
+        var next = 0u;
         loop {
+            var j: u32;
             if SKIP_MISSED == 1u {
-                while j < n && (batch_blocks[j] & block_bit) == 0u {
-                    j++;
+                while bits == 0u && mask_word < MASK_WORDS {
+                    bits = block_masks[block * MASK_WORDS + mask_word];
+                    mask_word++;
                 }
+                if bits == 0u || block_done(pending, lane) {
+                    break;
+                }
+                j = (mask_word - 1u) * 32u + firstTrailingBit(bits);
+                bits &= bits - 1u;
+            } else {
+                if next >= n || block_done(pending, lane) {
+                    break;
+                }
+                j = next;
+                next++;
             }
-            if j >= n || pending == 0u {
-                break;
-            }
-            let packed = batch_xy_depth_id[j];
-            let xy = bitcast<vec2<f32>>(packed.xy);
-            let co = batch_conic_opacity[j];
-            let gaussian_inv_depth = bitcast<f32>(packed.z);
-            let base = packed.w * FEATURE_WORDS;
-            var packed_features = vec4<f32>();
-            if PACKED {
-                packed_features = batch_features[j];
+            let g = load_batched(j, lane);
+            let co = g.conic_opacity;
+            var held: HeldFeatures;
+            if !PACKED {
+                held = hold_features(g.id, lane);
             }
             for (var k = 0u; k < PIXELS; k++) {
                 if done[k] {
                     continue;
                 }
-                let d = xy - vec2<f32>(origin + block_pixel(lid, k));
+                let d = g.xy - vec2<f32>(origin + block_pixel(lid, k));
                 let power = -0.5 * (co.x * d.x * d.x + co.z * d.y * d.y) - co.y * d.x * d.y;
                 if power > 0.0 {
                     continue;
@@ -165,24 +217,23 @@ fn main(
                 if test_t < 0.0001 {
                     done[k] = true;
                     pending -= 1u;
-                    atomicAdd(&num_done, 1u);
                     continue;
                 }
                 let w = alpha * t[k];
                 if PACKED {
-                    acc[k] += packed_features * w;
+                    acc[k] += g.packed_features * w;
                 } else {
                     for (var q = 0u; q < FEATURE_WORDS; q++) {
-                        acc[k * FEATURE_WORDS + q] += features[base + q] * w;
+                        acc[k * FEATURE_WORDS + q] += feature_word(held, g.id, q) * w;
                     }
                 }
-                inv_depth[k] += gaussian_inv_depth * w;
+                inv_depth[k] += g.inv_depth * w;
                 t[k] = test_t;
             }
-
-            continuing {
-                j++;
-            }
+        }
+        // Counted once per batch, not per finished pixel: num_done is read only at the loop's top.
+        if pending != pending_before {
+            atomicAdd(&num_done, pending_before - pending);
         }
         start += BATCH;
     }

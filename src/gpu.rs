@@ -33,9 +33,10 @@ pub fn required_limits(adapter: &wgpu::Adapter) -> wgpu::Limits {
     }
 }
 
-/// Timestamp queries are optional: the benchmark falls back to CPU timers without them.
+/// Optional: timestamp queries (the benchmark falls back to CPU timers without them) and subgroup
+/// operations (the rasterizer's CPU tuning shares loads with them, `RasterTuning`).
 pub fn optional_features(adapter: &wgpu::Adapter) -> wgpu::Features {
-    adapter.features() & wgpu::Features::TIMESTAMP_QUERY
+    adapter.features() & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SUBGROUP)
 }
 
 pub fn device_descriptor(adapter: &wgpu::Adapter) -> wgpu::DeviceDescriptor<'static> {

@@ -499,17 +499,19 @@ fn raster_tunings_agree_on_an_animated_avatar() {
         let lockstep = [1, 2, 4, 8].map(|p| (p, render(cloud, RasterTuning::Lockstep(p))));
         let one = &lockstep[0].1;
         assert!(one.alpha.iter().any(|&a| a > 0.5), "the avatar is drawn");
-        let cpu = render(cloud, RasterTuning::Cpu);
-        let cpu_pixels = RasterTuning::Cpu.pixels_per_thread(c as u32);
-        let same_layout = lockstep
-            .iter()
-            .find(|(p, _)| *p == cpu_pixels)
-            .expect("offered");
-        let differ = differing(&cpu, &same_layout.1);
-        println!(
-            "{c} channels: skipping vs lockstep at {cpu_pixels} pixels per thread: {differ} values differ"
-        );
-        assert_eq!(differ, 0, "{c} channels: skipping changed the image");
+        for tuning in crate::common::cpu_tunings() {
+            let cpu = render(cloud, tuning);
+            let cpu_pixels = tuning.pixels_per_thread(c as u32);
+            let same_layout = lockstep
+                .iter()
+                .find(|(p, _)| *p == cpu_pixels)
+                .expect("offered");
+            let differ = differing(&cpu, &same_layout.1);
+            println!(
+                "{c} channels: {tuning:?} vs lockstep at {cpu_pixels} pixels per thread: {differ} values differ"
+            );
+            assert_eq!(differ, 0, "{c} channels: {tuning:?} changed the image");
+        }
         for (p, render) in &lockstep[1..] {
             let d = crate::common::diff(render, one);
             println!("{c} channels: {p} pixels per thread vs 1: {d:?}");

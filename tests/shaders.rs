@@ -34,8 +34,17 @@ fn every_pass_validates() {
         for p in [1, 2, 4, 8] {
             for skip in [0, 1] {
                 let consts = [("CHANNELS", c), ("PIXELS", p), ("SKIP_MISSED", skip)];
-                validated(&format!("rasterize {consts:?}"), shader::RASTERIZE, &consts);
+                validated(
+                    &format!("rasterize {consts:?}"),
+                    shader::RASTERIZE_LOADS,
+                    &consts,
+                );
             }
+        }
+        for p in [1, 4] {
+            let consts = [("CHANNELS", c), ("PIXELS", p), ("SKIP_MISSED", 1)];
+            let label = format!("rasterize with shuffles {consts:?}");
+            validated(&label, shader::RASTERIZE_SHUFFLES, &consts);
         }
     }
 }

@@ -138,9 +138,9 @@ pub struct HeadlessRenderer {
 }
 
 impl HeadlessRenderer {
-    /// With the rasterizer layout suited to the adapter ([`RasterTuning::for_adapter`]).
+    /// With the rasterizer layout suited to the device ([`RasterTuning::for_device`]).
     pub fn new(gpu: GpuContext) -> Self {
-        let tuning = RasterTuning::for_adapter(&gpu.adapter.get_info());
+        let tuning = RasterTuning::for_device(&gpu.adapter.get_info(), gpu.device.features());
         Self::with_tuning(gpu, tuning)
     }
 

@@ -80,10 +80,10 @@ fn compute_pipeline(
 /// usual GPU layout: a warp skips the blending none of its threads needs.
 ///
 /// On a CPU adapter (lavapipe) a branch skips nothing: each SIMD row of 8 threads runs the loop
-/// body for every Gaussian with its lanes masked, and a load from workgroup memory costs far more
-/// than the arithmetic. So there each block of 8 threads steps over the Gaussians that reach none
-/// of its pixels (found once per batched Gaussian), and up to four channels each thread shades 4
-/// pixels and reuses every Gaussian it loads (with more channels the accumulators of several
+/// body for every Gaussian with its lanes masked, and a load from memory costs far more than the
+/// arithmetic. So there each block of 8 threads walks only the Gaussians that reach one of its
+/// pixels (a bit mask per block, found once per batch), and up to four channels each thread shades
+/// 4 pixels and reuses every Gaussian it loads (with more channels the accumulators of several
 /// pixels no longer fit in registers). Measured on lavapipe, 150k Gaussians at 512² (`guava bench
 /// splat`, side by side with the layout before, which had no skipping and gave each thread pixels
 /// of a column spaced apart): rasterizing 32 channels ×0.51–0.53, 3 channels ×0.57–0.63; one pixel
@@ -93,28 +93,48 @@ pub enum RasterTuning {
     /// This many pixels per thread (1, 2, 4 or 8), every thread reading every batched Gaussian.
     Lockstep(u32),
     /// CPU adapters: 4 pixels per thread up to four channels, 1 above, skipping Gaussians per block.
-    Cpu,
+    /// With `shuffles` each block is one subgroup whose 8 lanes load different words of a Gaussian
+    /// and exchange them (shaders/rasterize_fetch_shuffles.wgsl): llvmpipe loads memory one lane
+    /// at a time, so this cuts a Gaussian's loads 8-fold (rasterizing ×0.48–0.50 at 32 channels,
+    /// ×0.71–0.79 at 3 on lavapipe, README).
+    Cpu { shuffles: bool },
 }
 
 impl RasterTuning {
-    pub fn for_adapter(info: &wgpu::AdapterInfo) -> Self {
+    /// The layout for a device: lockstep on GPUs; on CPU adapters skipping, with shuffles where
+    /// the device has subgroups of exactly a block's 8 lanes.
+    pub fn for_device(info: &wgpu::AdapterInfo, features: wgpu::Features) -> Self {
         if info.device_type == wgpu::DeviceType::Cpu {
-            Self::Cpu
+            Self::Cpu {
+                shuffles: Self::shuffles_fit(info, features),
+            }
         } else {
             Self::Lockstep(1)
         }
     }
 
+    /// Whether blocks of 8 threads can be subgroups: the SUBGROUP feature and 8 lanes, no more or
+    /// fewer (lavapipe on AVX; 4 lanes with SSE only).
+    pub fn shuffles_fit(info: &wgpu::AdapterInfo, features: wgpu::Features) -> bool {
+        features.contains(wgpu::Features::SUBGROUP)
+            && info.subgroup_min_size == 8
+            && info.subgroup_max_size == 8
+    }
+
     pub fn pixels_per_thread(self, channels: u32) -> u32 {
         match self {
             Self::Lockstep(p) => p,
-            Self::Cpu if channels <= 4 => 4,
-            Self::Cpu => 1,
+            Self::Cpu { .. } if channels <= 4 => 4,
+            Self::Cpu { .. } => 1,
         }
     }
 
     pub fn skips_missed(self) -> bool {
-        self == Self::Cpu
+        matches!(self, Self::Cpu { .. })
+    }
+
+    fn shuffles(self) -> bool {
+        matches!(self, Self::Cpu { shuffles: true })
     }
 }
 
@@ -295,13 +315,21 @@ impl SplatPipelines {
             .or_insert_with(|| {
                 let pixels = self.tuning.pixels_per_thread(channels);
                 let skip = u32::from(self.tuning.skips_missed());
-                let label = format!("Splat::rasterize[C={channels},P={pixels},skip={skip}]");
+                let shuffles = self.tuning.shuffles();
+                let label = format!(
+                    "Splat::rasterize[C={channels},P={pixels},skip={skip},shuffles={shuffles}]"
+                );
                 let consts = [
                     ("CHANNELS", channels),
                     ("PIXELS", pixels),
                     ("SKIP_MISSED", skip),
                 ];
-                let m = shader::module(device, &label, shader::RASTERIZE, &consts);
+                let source = if shuffles {
+                    shader::RASTERIZE_SHUFFLES
+                } else {
+                    shader::RASTERIZE_LOADS
+                };
+                let m = shader::module(device, &label, source, &consts);
                 compute_pipeline(device, &label, &self.rasterize_layout, &m, "main")
             })
             .clone()

@@ -7,7 +7,16 @@ pub const SCAN: &str = include_str!("../../shaders/scan.wgsl");
 pub const RADIX_SORT: &str = include_str!("../../shaders/radix_sort.wgsl");
 pub const TILE_KEYS: &str = include_str!("../../shaders/tile_keys.wgsl");
 pub const TILE_RANGES: &str = include_str!("../../shaders/tile_ranges.wgsl");
-pub const RASTERIZE: &str = include_str!("../../shaders/rasterize.wgsl");
+/// The rasterizer with each way its threads read a batched Gaussian (shaders/rasterize_fetch_*.wgsl):
+/// every thread loading all of it, or the 8 lanes of a subgroup loading parts and exchanging them.
+pub const RASTERIZE_LOADS: &str = concat!(
+    include_str!("../../shaders/rasterize_fetch_loads.wgsl"),
+    include_str!("../../shaders/rasterize.wgsl")
+);
+pub const RASTERIZE_SHUFFLES: &str = concat!(
+    include_str!("../../shaders/rasterize_fetch_shuffles.wgsl"),
+    include_str!("../../shaders/rasterize.wgsl")
+);
 pub const PRESENT: &str = include_str!("../../shaders/present.wgsl");
 pub const MESH: &str = include_str!("../../shaders/mesh.wgsl");
 
@@ -24,8 +33,13 @@ pub const ALL: &[(&str, &str, Consts)] = &[
     ("tile_ranges", TILE_RANGES, &[]),
     (
         "rasterize",
-        RASTERIZE,
+        RASTERIZE_LOADS,
         &[("CHANNELS", 3), ("PIXELS", 1), ("SKIP_MISSED", 0)],
+    ),
+    (
+        "rasterize_shuffles",
+        RASTERIZE_SHUFFLES,
+        &[("CHANNELS", 3), ("PIXELS", 1), ("SKIP_MISSED", 1)],
     ),
     ("present", PRESENT, &[]),
     ("mesh", MESH, &[]),

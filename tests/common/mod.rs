@@ -17,11 +17,29 @@ fn gpu() -> GpuContext {
 
 /// Renderers for the rasterizer's tunings (GPUs' one pixel per thread in lockstep; CPU adapters'
 /// 4 pixels per thread up to four channels, 1 above, skipping Gaussians that miss a block of
-/// threads), so each is tested whatever the adapter.
+/// threads, with and without subgroup shuffles), so each is tested whatever the adapter.
 pub fn renderers() -> Vec<HeadlessRenderer> {
-    [RasterTuning::Lockstep(1), RasterTuning::Cpu]
+    cpu_tunings()
+        .into_iter()
+        .chain([RasterTuning::Lockstep(1)])
         .map(|t| HeadlessRenderer::with_tuning(gpu(), t))
-        .into()
+        .collect()
+}
+
+/// The CPU tunings this adapter can run: with shuffles only where its subgroups are 8 lanes
+/// (lavapipe on AVX, as in CI); said on stderr where not.
+pub fn cpu_tunings() -> Vec<RasterTuning> {
+    let gpu = gpu();
+    let mut tunings = vec![RasterTuning::Cpu { shuffles: false }];
+    if RasterTuning::shuffles_fit(&gpu.adapter.get_info(), gpu.device.features()) {
+        tunings.push(RasterTuning::Cpu { shuffles: true });
+    } else {
+        eprintln!(
+            "no 8-lane subgroups on {}: shuffles untested",
+            gpu.adapter_label()
+        );
+    }
+    tunings
 }
 
 /// The pass's counters against the f64 reference's: every culling count equal; tile pairs no

@@ -121,7 +121,7 @@ impl ViewportResources {
     ) -> Self {
         let pipelines = Arc::new(SplatPipelines::new(
             device,
-            RasterTuning::for_adapter(adapter),
+            RasterTuning::for_device(adapter, device.features()),
         ));
         Self {
             splatter: Splatter::new(device, pipelines),
