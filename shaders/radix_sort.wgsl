@@ -1,4 +1,4 @@
-//! One 4-bit pass of a stable LSD radix sort of (key, value) pairs, in two dispatches around a
+//! One 5-bit pass of a stable LSD radix sort of (key, value) pairs, in two dispatches around a
 //! prefix scan of the histogram: `histogram` counts each block's digits into hist[digit][block];
 //! after scan.wgsl turns that digit-major table into output offsets, `scatter` writes every pair to
 //! its place. Each thread owns SORT_ITEMS consecutive pairs and writes them in order, so equal keys
@@ -9,7 +9,7 @@
 //! lanes masked off, but leave a loop once all of a SIMD row's lanes have, so idle rows and the
 //! blocks past the live count cost next to nothing there. On a GPU the two forms are the same.
 
-const RADIX: u32 = 16u;
+const RADIX: u32 = 32u;
 // Few threads with many items each: the digit table and the walks over it shrink with the thread
 // count (on llvmpipe 32 threads of 64 items sort in about 0.8 of the time of 128 of 16).
 const SORT_THREADS: u32 = 32u;
@@ -39,15 +39,27 @@ fn digit_of(key: u32) -> u32 {
     return (key >> pass_params.shift) & (RADIX - 1u);
 }
 
-// One byte per digit, four digits to a word: adding one_hot(d) counts digit d with no indexing
-// into a per-thread array (which spills to memory on GPUs and is a per-lane loop on llvmpipe).
-// A thread counts at most SORT_ITEMS < 256 of a digit.
-fn one_hot(d: u32) -> vec4<u32> {
-    return select(vec4<u32>(0u), vec4<u32>(1u << ((d & 3u) * 8u)), vec4<u32>(d >> 2u) == vec4<u32>(0u, 1u, 2u, 3u));
+// One byte per digit, four digits to a word, 16 to a vec4: adding one_hot(d) counts digit d with
+// no indexing into a per-thread array (which spills to memory on GPUs and is a per-lane loop on
+// llvmpipe). A thread counts at most SORT_ITEMS < 256 of a digit.
+struct DigitCounts {
+    low: vec4<u32>,
+    high: vec4<u32>,
 }
 
-fn byte_of(packed: vec4<u32>, d: u32) -> u32 {
-    return (packed[d >> 2u] >> ((d & 3u) * 8u)) & 0xffu;
+fn one_hot(d: u32) -> DigitCounts {
+    let word = select(vec4<u32>(0u), vec4<u32>(1u << ((d & 3u) * 8u)), vec4<u32>((d >> 2u) & 3u) == vec4<u32>(0u, 1u, 2u, 3u));
+    let high = d >= 16u;
+    return DigitCounts(select(word, vec4<u32>(0u), high), select(vec4<u32>(0u), word, high));
+}
+
+fn add_counts(a: DigitCounts, b: DigitCounts) -> DigitCounts {
+    return DigitCounts(a.low + b.low, a.high + b.high);
+}
+
+fn byte_of(packed: DigitCounts, d: u32) -> u32 {
+    let half = select(packed.low, packed.high, d >= 16u);
+    return (half[(d >> 2u) & 3u] >> ((d & 3u) * 8u)) & 0xffu;
 }
 
 struct Block {
@@ -68,9 +80,9 @@ fn block_of(block: u32, lid: u32) -> Block {
 // Counts this thread's digits into the workgroup table (threads past b.threads write nothing and
 // are never read).
 fn count_digits(b: Block, lid: u32) {
-    var packed = vec4<u32>(0u);
+    var packed = DigitCounts();
     for (var k = 0u; k < SORT_ITEMS && b.start + k < b.n; k++) {
-        packed += one_hot(digit_of(keys_in[b.start + k]));
+        packed = add_counts(packed, one_hot(digit_of(keys_in[b.start + k])));
     }
     for (var d = 0u; d < RADIX && lid < b.threads; d++) {
         counts[d * SORT_THREADS + lid] = byte_of(packed, d);
@@ -118,7 +130,7 @@ fn scatter(
     workgroupBarrier();
     // Each item goes to its digit's first position for this thread plus the earlier items of
     // the same digit.
-    var seen = vec4<u32>(0u);
+    var seen = DigitCounts();
     for (var k = 0u; k < SORT_ITEMS && b.start + k < b.n; k++) {
         let idx = b.start + k;
         let key = keys_in[idx];
@@ -126,6 +138,6 @@ fn scatter(
         let pos = counts[d * SORT_THREADS + lid] + byte_of(seen, d);
         keys_out[pos] = key;
         vals_out[pos] = vals_in[idx];
-        seen += one_hot(d);
+        seen = add_counts(seen, one_hot(d));
     }
 }

@@ -1,5 +1,5 @@
 //! Host side of shaders/radix_sort.wgsl: a stable LSD sort of (u32 key, u32 value) pairs on the GPU,
-//! 4 bits per pass, ping-ponging between the A and B buffers; after an odd number of passes the
+//! 5 bits per pass, ping-ponging between the A and B buffers; after an odd number of passes the
 //! result is in B ([`RadixSort::result_in_b`]). The live element count is read on the GPU from a buffer;
 //! dispatches are sized for the buffers' capacity and idle blocks exit at once.
 
@@ -9,8 +9,8 @@ use super::scan::{PrefixScan, entry};
 use wgpu::util::DeviceExt;
 
 pub const SORT_BLOCK: u32 = 2048;
-const RADIX: u32 = 16;
-const BITS_PER_PASS: u32 = 4;
+const RADIX: u32 = 32;
+const BITS_PER_PASS: u32 = 5;
 /// Uniform offsets must be 256-byte aligned.
 const UNIFORM_STRIDE: u64 = 256;
 
@@ -256,8 +256,9 @@ mod tests {
 
     #[test]
     fn pass_count_covers_the_key_bits() {
-        assert_eq!(pass_count(32), 8);
-        assert_eq!(pass_count(10), 3);
+        assert_eq!(pass_count(32), 7);
+        assert_eq!(pass_count(10), 2);
+        assert_eq!(pass_count(11), 3);
         assert_eq!(pass_count(1), 1);
         assert_eq!(pass_count(0), 1);
     }

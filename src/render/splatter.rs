@@ -430,6 +430,12 @@ impl Splatter {
             c.capacity,
             32,
         );
+        // gather_counts and emit_keys read the depth order where the sort left it.
+        let depth_order = if depth_sort.result_in_b() {
+            &c.depth_order_tmp
+        } else {
+            &c.depth_order
+        };
         let pair_scan = PrefixScan::new(
             device,
             pipes,
@@ -444,7 +450,7 @@ impl Splatter {
             &pipes.keys_layout,
             &[
                 &self.frame,
-                &c.depth_order,
+                depth_order,
                 &c.touched,
                 &c.pair_offsets,
                 &c.projected,
@@ -470,10 +476,6 @@ impl Splatter {
             },
             v.pair_capacity,
             tile_bits,
-        );
-        assert!(
-            !depth_sort.result_in_b(),
-            "gather_counts and emit_keys read the depth order from A"
         );
         // The tile sort's pass count follows the tile count; read its result where it landed.
         let (sorted_keys, sorted_vals) = if tile_sort.result_in_b() {
