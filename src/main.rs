@@ -745,6 +745,12 @@ fn info() -> Result<()> {
             "no (benchmarks use CPU timers)"
         }
     );
+    println!(
+        "subgroups: {}..={} lanes; rasterizer tuning: {:?}",
+        info.subgroup_min_size,
+        info.subgroup_max_size,
+        guava::render::RasterTuning::for_device(&info, gpu.device.features())
+    );
     match guava::onnx::OnnxRuntime::load() {
         Ok(rt) => println!(
             "onnxruntime: {} loaded from {}",

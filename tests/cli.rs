@@ -19,7 +19,9 @@ fn info_reports_adapter_and_onnx_runtime() {
     let (ok, stdout, stderr) = guava(&["info"]);
     assert!(ok, "{stderr}");
     assert!(
-        stdout.contains("adapter:") && stdout.contains("limits:"),
+        stdout.contains("adapter:")
+            && stdout.contains("limits:")
+            && stdout.contains("rasterizer tuning:"),
         "{stdout}"
     );
     assert!(
