@@ -41,8 +41,10 @@ pub fn splat(args: &SplatBenchArgs) -> anyhow::Result<()> {
     let mut renderer = HeadlessRenderer::new(GpuContext::headless()?);
     // A CPU adapter's timestamps misplace the work (on lavapipe the preprocess of 150k Gaussians
     // read 0.05 ms, its time landing in later stages), so there each stage is timed on its own.
-    let cpu_adapter = renderer.gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
-    let timer = StageTimer::new(&renderer.gpu.device, &renderer.gpu.queue).filter(|_| !cpu_adapter);
+    let timer = match renderer.gpu.adapter.get_info().device_type {
+        wgpu::DeviceType::Cpu => None,
+        _ => StageTimer::new(&renderer.gpu.device, &renderer.gpu.queue),
+    };
     println!("adapter: {}", renderer.gpu.adapter_label());
     println!(
         "stage times: {}; frame: CPU wall time of a whole submitted frame; medians of {} frames",

@@ -1,6 +1,6 @@
 //! Host side of shaders/radix_sort.wgsl: a stable LSD sort of (u32 key, u32 value) pairs on the GPU,
 //! 5 bits per pass, ping-ponging between the A and B buffers; after an odd number of passes the
-//! result is in B ([`RadixSort::result_in_b`]). The live element count is read on the GPU from a buffer;
+//! result is in B ([`RadixSort::sorted`]). The live element count is read on the GPU from a buffer;
 //! dispatches are sized for the buffers' capacity and idle blocks exit at once.
 
 use super::layout::SortPass;
@@ -120,9 +120,10 @@ impl RadixSort {
         }
     }
 
-    /// After an odd number of passes the sorted pairs are in the B buffers.
-    pub fn result_in_b(&self) -> bool {
-        self.passes.len() % 2 == 1
+    /// Whichever of the A and B buffers (or anything bound to them) holds the sorted pairs: B after
+    /// an odd number of passes. The pass count follows the key bits, so callers never assume one.
+    pub fn sorted<T>(&self, a: T, b: T) -> T {
+        if self.passes.len() % 2 == 1 { b } else { a }
     }
 
     pub fn encode(&self, pipes: &SplatPipelines, pass: &mut wgpu::ComputePass<'_>) {
@@ -195,11 +196,7 @@ mod tests {
         if n == 0 {
             return (Vec::new(), Vec::new());
         }
-        let (k, v) = if sort.result_in_b() {
-            (&kb, &vb)
-        } else {
-            (&ka, &va)
-        };
+        let (k, v) = sort.sorted((&ka, &va), (&kb, &vb));
         let out = read_buffers(device, queue, &[(k, n), (v, n)]);
         (
             bytemuck::cast_slice(&out[0]).to_vec(),

@@ -431,11 +431,7 @@ impl Splatter {
             32,
         );
         // gather_counts and emit_keys read the depth order where the sort left it.
-        let depth_order = if depth_sort.result_in_b() {
-            &c.depth_order_tmp
-        } else {
-            &c.depth_order
-        };
+        let depth_order = depth_sort.sorted(&c.depth_order, &c.depth_order_tmp);
         let pair_scan = PrefixScan::new(
             device,
             pipes,
@@ -478,11 +474,10 @@ impl Splatter {
             tile_bits,
         );
         // The tile sort's pass count follows the tile count; read its result where it landed.
-        let (sorted_keys, sorted_vals) = if tile_sort.result_in_b() {
-            (&v.tile_keys_tmp, &v.tile_vals_tmp)
-        } else {
-            (&v.tile_keys, &v.tile_vals)
-        };
+        let (sorted_keys, sorted_vals) = tile_sort.sorted(
+            (&v.tile_keys, &v.tile_vals),
+            (&v.tile_keys_tmp, &v.tile_vals_tmp),
+        );
         let ranges = group(
             "Splat::tile_ranges",
             &pipes.ranges_layout,
