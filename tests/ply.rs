@@ -1,5 +1,5 @@
 //! 3DGS PLY in and out: round trips, files written the way the original 3DGS code writes them,
-//! and malformed files.
+//! PlayCanvas's compressed layout against PlayCanvas's own decoder, and malformed files.
 
 use guava::gaussians::ply::{self, SH_C0};
 use guava::gaussians::synthetic::BallCloud;
@@ -148,4 +148,91 @@ fn writing_never_leaves_a_partial_file() {
     ply::write(&path, &cloud).expect("overwrite");
     assert_eq!(std::fs::read(&path).expect("read"), first);
     std::fs::remove_file(&path).ok();
+}
+
+fn splat_transform_fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/splat_transform")
+        .join(name)
+}
+
+/// tools/make_compressed_ply_fixture.py compressed 1,000 random Gaussians with degree-1 SH into
+/// four chunks (the last partial) with PlayCanvas's splat-transform, and had it decode the file
+/// back to the standard layout. Our reading of the compressed file must match that decoding.
+/// Both decode in f64 and round once to f32; what differs is where the standard file's logit,
+/// log-scale and SH DC are activated in f32, so 2e-6 relative (a few f32 ulps) bounds it.
+#[test]
+fn compressed_files_read_as_playcanvas_decodes_them() {
+    let ours = ply::read(&splat_transform_fixture("cloud.compressed.ply")).expect("compressed");
+    let theirs = ply::read(&splat_transform_fixture("decoded.ply")).expect("decoded");
+    assert_eq!((ours.len(), ours.channels), (1000, 3));
+    assert_eq!((theirs.len(), theirs.channels), (1000, 3));
+    let close = |a: f32, b: f32| (a - b).abs() <= 2e-6 * b.abs().max(1.0);
+    let mut distinct_opacities = std::collections::BTreeSet::new();
+    for i in 0..ours.len() {
+        let pairs = [
+            (&ours.positions[i][..], &theirs.positions[i][..]),
+            (&ours.rotations[i][..], &theirs.rotations[i][..]),
+            (&ours.scales[i][..], &theirs.scales[i][..]),
+            (&ours.opacities[i..=i], &theirs.opacities[i..=i]),
+            (ours.features_of(i), theirs.features_of(i)),
+        ];
+        for (a, b) in pairs {
+            assert!(
+                a.iter().zip(b).all(|(x, y)| close(*x, *y)),
+                "splat {i}: {a:?} vs {b:?}"
+            );
+        }
+        distinct_opacities.insert(ours.opacities[i].to_bits());
+    }
+    // The fixture is not degenerate: opacities span the 8-bit range.
+    assert!(
+        distinct_opacities.len() > 100,
+        "{}",
+        distinct_opacities.len()
+    );
+}
+
+#[test]
+fn malformed_compressed_files_name_the_problem() {
+    let bytes = std::fs::read(splat_transform_fixture("cloud.compressed.ply")).expect("fixture");
+    let header_end = bytes
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .expect("header")
+        + 11;
+    let header = std::str::from_utf8(&bytes[..header_end]).expect("ASCII header");
+    let with_header = |h: String| [h.as_bytes(), &bytes[header_end..]].concat();
+    let cases = [
+        (
+            "fewchunks.compressed.ply",
+            with_header(header.replace("element chunk 4", "element chunk 3")),
+            "element `chunk` has 3 rows",
+        ),
+        (
+            "nobound.compressed.ply",
+            with_header(header.replace("property float max_b\n", "property float max_q\n")),
+            "chunk property `max_b` is missing",
+        ),
+        (
+            "nocolour.compressed.ply",
+            with_header(header.replace(
+                "property uint packed_color\n",
+                "property uint packed_rgba\n",
+            )),
+            "vertex property `packed_color` is missing",
+        ),
+        (
+            "trunc.compressed.ply",
+            // Cut inside the vertices: the SH element after them is 9 bytes a splat.
+            bytes[..bytes.len() - 9 * 1000 - 5].to_vec(),
+            "file ends at vertex 999 of 1000: truncated",
+        ),
+    ];
+    for (name, file, expect) in cases {
+        let err = ply::read_from(Cursor::new(file), Path::new(name))
+            .expect_err(name)
+            .to_string();
+        assert!(err.contains(name) && err.contains(expect), "{name}: {err}");
+    }
 }

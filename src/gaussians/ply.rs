@@ -3,7 +3,11 @@
 //! view-independent colour), `opacity` as a logit, `scale_0..2` as logs, `rot_0..3` as (w, x, y, z).
 //! Channels beyond RGB are stored as `feat_3 … feat_{C−1}`, so 32-channel GUAVA clouds round-trip.
 //! Reading applies the activations (sigmoid, exp, SH DC → colour, quaternion normalisation, as
-//! 3DGS's `GaussianModel` getters do); writing inverts them.
+//! 3DGS's `GaussianModel` getters do); writing inverts them. Reading also takes PlayCanvas's
+//! compressed layout (SuperSplat's `.compressed.ply`, [`compressed`]); writing is always the
+//! standard one.
+
+mod compressed;
 
 use super::{GaussianCloud, MAX_CHANNELS};
 use std::io::{BufRead, BufReader, Write};
@@ -91,10 +95,24 @@ impl Scalar {
     }
 }
 
-struct Header {
-    encoding: Encoding,
+/// One `element` of the header: its rows and their scalar properties in file order.
+struct Element {
+    name: String,
     count: usize,
     properties: Vec<(String, Scalar)>,
+    /// A list property (meshes' faces): such rows cannot be read, only ignored after the vertices.
+    has_list: bool,
+}
+
+impl Element {
+    fn find(&self, name: &str) -> Option<usize> {
+        self.properties.iter().position(|(n, _)| n == name)
+    }
+}
+
+struct Header {
+    encoding: Encoding,
+    elements: Vec<Element>,
 }
 
 fn sigmoid(x: f32) -> f32 {
@@ -109,16 +127,115 @@ pub fn read(path: &Path) -> Result<GaussianCloud, PlyError> {
     read_from(BufReader::new(file), path)
 }
 
-/// Reads from any stream; `path` only names the source in errors.
+/// Reads from any stream; `path` only names the source in errors. Reads the standard 3DGS layout
+/// and PlayCanvas's compressed one (vertices with `packed_position`, see [`compressed`]).
 pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<GaussianCloud, PlyError> {
     let fail = |problem: String| PlyError::Format {
         path: path.to_path_buf(),
         problem,
     };
     let header = read_header(&mut input).map_err(fail)?;
-    let find = |name: &str| header.properties.iter().position(|(n, _)| n == name);
-    let require =
-        |name: &str| find(name).ok_or_else(|| fail(format!("vertex property `{name}` is missing")));
+    let vertex_at = header
+        .elements
+        .iter()
+        .position(|e| e.name == "vertex")
+        .ok_or_else(|| fail("header has no `element vertex`".into()))?;
+    let vertex = &header.elements[vertex_at];
+    let is_compressed = vertex.find(compressed::PACKED[0]).is_some();
+    // Elements before the vertices are read past, except a compressed file's chunk bounds; those
+    // after them are never read.
+    let mut chunks = Vec::new();
+    for element in &header.elements[..vertex_at] {
+        if is_compressed && element.name == "chunk" {
+            let columns = compressed::ChunkColumns::new(element).map_err(fail)?;
+            for_each_row(&mut input, header.encoding, element, &fail, |_, row| {
+                chunks.push(columns.chunk(row));
+                Ok(())
+            })?;
+        } else {
+            for_each_row(&mut input, header.encoding, element, &fail, |_, _| Ok(()))?;
+        }
+    }
+    if is_compressed {
+        read_compressed(&mut input, header.encoding, vertex, &chunks, &fail)
+    } else {
+        read_standard(&mut input, header.encoding, vertex, &fail)
+    }
+}
+
+/// Hands each of `element`'s rows to `each` with its index, as f64 values in property order.
+fn for_each_row(
+    input: &mut impl BufRead,
+    encoding: Encoding,
+    element: &Element,
+    fail: &impl Fn(String) -> PlyError,
+    mut each: impl FnMut(usize, &[f64]) -> Result<(), PlyError>,
+) -> Result<(), PlyError> {
+    let name = &element.name;
+    if element.has_list {
+        return Err(fail(format!(
+            "element `{name}` has list properties, which are not supported before or on the vertices"
+        )));
+    }
+    let mut row = vec![0.0f64; element.properties.len()];
+    let row_bytes: usize = element.properties.iter().map(|(_, s)| s.size()).sum();
+    let mut buf = vec![0u8; row_bytes];
+    let mut line = String::new();
+    for r in 0..element.count {
+        match encoding {
+            Encoding::Ascii => {
+                line.clear();
+                input
+                    .read_line(&mut line)
+                    .map_err(|e| fail(format!("{name} {r}: {e}")))?;
+                let mut values = line.split_ascii_whitespace();
+                for (k, slot) in row.iter_mut().enumerate() {
+                    let text = values.next().ok_or_else(|| {
+                        fail(format!(
+                            "{name} {r}: only {k} of {} values",
+                            element.properties.len()
+                        ))
+                    })?;
+                    *slot = text.parse().map_err(|_| {
+                        fail(format!(
+                            "{name} {r}, property `{}`: `{text}` is not a number",
+                            element.properties[k].0
+                        ))
+                    })?;
+                }
+            }
+            Encoding::BinaryLittle | Encoding::BinaryBig => {
+                input.read_exact(&mut buf).map_err(|_| {
+                    fail(format!(
+                        "file ends at {name} {r} of {}: truncated",
+                        element.count
+                    ))
+                })?;
+                let big = encoding == Encoding::BinaryBig;
+                let mut at = 0;
+                for (k, (_, s)) in element.properties.iter().enumerate() {
+                    row[k] = s.read(&buf[at..], big);
+                    at += s.size();
+                }
+            }
+        }
+        each(r, &row)?;
+    }
+    Ok(())
+}
+
+/// The standard 3DGS layout, with `feat_*` channels beyond RGB.
+fn read_standard(
+    input: &mut impl BufRead,
+    encoding: Encoding,
+    vertex: &Element,
+    fail: &impl Fn(String) -> PlyError,
+) -> Result<GaussianCloud, PlyError> {
+    let require = |name: &str| {
+        vertex
+            .find(name)
+            .ok_or_else(|| fail(format!("vertex property `{name}` is missing")))
+    };
     let pos = [require("x")?, require("y")?, require("z")?];
     let opacity = require("opacity")?;
     let scale = [
@@ -134,7 +251,7 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<GaussianCloud, 
     ];
     let dc = [require("f_dc_0")?, require("f_dc_1")?, require("f_dc_2")?];
     let mut extra = Vec::new();
-    while let Some(i) = find(&format!("feat_{}", 3 + extra.len())) {
+    while let Some(i) = vertex.find(&format!("feat_{}", 3 + extra.len())) {
         extra.push(i);
     }
     let channels = 3 + extra.len();
@@ -145,49 +262,8 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<GaussianCloud, 
     }
 
     let mut cloud = GaussianCloud::new(channels);
-    let mut row = vec![0.0f64; header.properties.len()];
     let mut feats = vec![0.0f32; channels];
-    let row_bytes: usize = header.properties.iter().map(|(_, s)| s.size()).sum();
-    let mut buf = vec![0u8; row_bytes];
-    let mut lines = String::new();
-    for v in 0..header.count {
-        match header.encoding {
-            Encoding::Ascii => {
-                lines.clear();
-                input
-                    .read_line(&mut lines)
-                    .map_err(|e| fail(format!("vertex {v}: {e}")))?;
-                let mut values = lines.split_ascii_whitespace();
-                for (k, slot) in row.iter_mut().enumerate() {
-                    let text = values.next().ok_or_else(|| {
-                        fail(format!(
-                            "vertex {v}: only {k} of {} values",
-                            header.properties.len()
-                        ))
-                    })?;
-                    *slot = text.parse().map_err(|_| {
-                        fail(format!(
-                            "vertex {v}, property `{}`: `{text}` is not a number",
-                            header.properties[k].0
-                        ))
-                    })?;
-                }
-            }
-            Encoding::BinaryLittle | Encoding::BinaryBig => {
-                input.read_exact(&mut buf).map_err(|_| {
-                    fail(format!(
-                        "file ends at vertex {v} of {}: truncated",
-                        header.count
-                    ))
-                })?;
-                let big = header.encoding == Encoding::BinaryBig;
-                let mut at = 0;
-                for (k, (_, s)) in header.properties.iter().enumerate() {
-                    row[k] = s.read(&buf[at..], big);
-                    at += s.size();
-                }
-            }
-        }
+    for_each_row(input, encoding, vertex, fail, |_, row| {
         let get = |i: usize| row[i] as f32;
         let q = rot.map(get);
         let norm = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
@@ -205,7 +281,59 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<GaussianCloud, 
             sigmoid(get(opacity)),
             &feats,
         );
+        Ok(())
+    })?;
+    Ok(cloud)
+}
+
+/// PlayCanvas's compressed layout: packed vertices decoded within their chunk's bounds.
+fn read_compressed(
+    input: &mut impl BufRead,
+    encoding: Encoding,
+    vertex: &Element,
+    chunks: &[compressed::Chunk],
+    fail: &impl Fn(String) -> PlyError,
+) -> Result<GaussianCloud, PlyError> {
+    let mut packed = [0; 4];
+    for (slot, name) in packed.iter_mut().zip(compressed::PACKED) {
+        *slot = vertex
+            .find(name)
+            .ok_or_else(|| fail(format!("vertex property `{name}` is missing")))?;
     }
+    let needed = vertex.count.div_ceil(compressed::CHUNK_SPLATS);
+    if chunks.len() < needed {
+        return Err(fail(format!(
+            "element `chunk` has {} rows before the vertices; {} compressed vertices need {needed}",
+            chunks.len(),
+            vertex.count
+        )));
+    }
+    let mut cloud = GaussianCloud::new(3);
+    for_each_row(input, encoding, vertex, fail, |v, row| {
+        let words = packed.map(|i| row[i]);
+        if let Some(bad) = words
+            .iter()
+            .position(|&w| w < 0.0 || w > f64::from(u32::MAX) || w.fract() != 0.0)
+        {
+            return Err(fail(format!(
+                "vertex {v}, property `{}`: {} is not a packed 32-bit word",
+                compressed::PACKED[bad],
+                words[bad]
+            )));
+        }
+        let splat = compressed::decode(
+            &chunks[v / compressed::CHUNK_SPLATS],
+            words.map(|w| w as u32),
+        );
+        cloud.push(
+            splat.position,
+            splat.rotation,
+            splat.scale,
+            splat.opacity,
+            &splat.colour,
+        );
+        Ok(())
+    })?;
     Ok(cloud)
 }
 
@@ -224,9 +352,7 @@ fn read_header(input: &mut impl BufRead) -> Result<Header, String> {
         return Err("not a PLY file (first line is not `ply`)".into());
     }
     let mut encoding = None;
-    let mut count = None;
-    let mut properties = Vec::new();
-    let mut in_vertex = false;
+    let mut elements: Vec<Element> = Vec::new();
     loop {
         next(&mut line)?;
         let words: Vec<&str> = line.split_ascii_whitespace().collect();
@@ -241,38 +367,34 @@ fn read_header(input: &mut impl BufRead) -> Result<Header, String> {
                 })
             }
             ["comment", ..] | ["obj_info", ..] | [] => {}
-            ["element", name, n] => {
-                if count.is_some() && !in_vertex {
-                    continue;
+            ["element", name, n] => elements.push(Element {
+                name: name.to_string(),
+                count: n
+                    .parse()
+                    .map_err(|_| format!("{name} count `{n}` is not a number"))?,
+                properties: Vec::new(),
+                has_list: false,
+            }),
+            ["property", rest @ ..] => {
+                let element = elements
+                    .last_mut()
+                    .ok_or("a `property` line before any `element`")?;
+                match rest {
+                    ["list", ..] => element.has_list = true,
+                    [ty, name] => {
+                        let scalar = Scalar::parse(ty)
+                            .ok_or_else(|| format!("property `{name}` has unknown type `{ty}`"))?;
+                        element.properties.push((name.to_string(), scalar));
+                    }
+                    _ => return Err(format!("unexpected header line `{}`", line.trim_end())),
                 }
-                if *name == "vertex" {
-                    count = Some(
-                        n.parse::<usize>()
-                            .map_err(|_| format!("vertex count `{n}` is not a number"))?,
-                    );
-                    in_vertex = true;
-                } else if count.is_none() {
-                    return Err(format!("element `{name}` before `vertex` is not supported"));
-                } else {
-                    in_vertex = false;
-                }
             }
-            ["property", "list", ..] if in_vertex => {
-                return Err("list properties on vertices are not supported".into());
-            }
-            ["property", ty, name] if in_vertex => {
-                let scalar = Scalar::parse(ty)
-                    .ok_or_else(|| format!("property `{name}` has unknown type `{ty}`"))?;
-                properties.push((name.to_string(), scalar));
-            }
-            ["property", ..] => {}
             _ => return Err(format!("unexpected header line `{}`", line.trim_end())),
         }
     }
     Ok(Header {
         encoding: encoding.ok_or("header has no `format` line")?,
-        count: count.ok_or("header has no `element vertex`")?,
-        properties,
+        elements,
     })
 }
 
