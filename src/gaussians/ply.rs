@@ -108,6 +108,21 @@ impl Element {
     fn find(&self, name: &str) -> Option<usize> {
         self.properties.iter().position(|(n, _)| n == name)
     }
+
+    /// The column of a property the layout needs, or the problem naming it.
+    fn require(&self, name: &str) -> Result<usize, String> {
+        self.find(name)
+            .ok_or_else(|| format!("{} property `{name}` is missing", self.name))
+    }
+
+    /// [`Self::require`] for each of `names`, in order.
+    fn require_all<const N: usize>(&self, names: [&str; N]) -> Result<[usize; N], String> {
+        let mut columns = [0; N];
+        for (slot, name) in columns.iter_mut().zip(names) {
+            *slot = self.require(name)?;
+        }
+        Ok(columns)
+    }
 }
 
 struct Header {
@@ -231,25 +246,14 @@ fn read_standard(
     vertex: &Element,
     fail: &impl Fn(String) -> PlyError,
 ) -> Result<GaussianCloud, PlyError> {
-    let require = |name: &str| {
-        vertex
-            .find(name)
-            .ok_or_else(|| fail(format!("vertex property `{name}` is missing")))
-    };
-    let pos = [require("x")?, require("y")?, require("z")?];
-    let opacity = require("opacity")?;
-    let scale = [
-        require("scale_0")?,
-        require("scale_1")?,
-        require("scale_2")?,
-    ];
-    let rot = [
-        require("rot_0")?,
-        require("rot_1")?,
-        require("rot_2")?,
-        require("rot_3")?,
-    ];
-    let dc = [require("f_dc_0")?, require("f_dc_1")?, require("f_dc_2")?];
+    let columns = |names| vertex.require_all(names).map_err(fail);
+    let pos = columns(["x", "y", "z"])?;
+    let opacity = vertex.require("opacity").map_err(fail)?;
+    let scale = columns(["scale_0", "scale_1", "scale_2"])?;
+    let dc = columns(["f_dc_0", "f_dc_1", "f_dc_2"])?;
+    let rot = vertex
+        .require_all(["rot_0", "rot_1", "rot_2", "rot_3"])
+        .map_err(fail)?;
     let mut extra = Vec::new();
     while let Some(i) = vertex.find(&format!("feat_{}", 3 + extra.len())) {
         extra.push(i);
@@ -294,12 +298,7 @@ fn read_compressed(
     chunks: &[compressed::Chunk],
     fail: &impl Fn(String) -> PlyError,
 ) -> Result<GaussianCloud, PlyError> {
-    let mut packed = [0; 4];
-    for (slot, name) in packed.iter_mut().zip(compressed::PACKED) {
-        *slot = vertex
-            .find(name)
-            .ok_or_else(|| fail(format!("vertex property `{name}` is missing")))?;
-    }
+    let packed = vertex.require_all(compressed::PACKED).map_err(fail)?;
     let needed = vertex.count.div_ceil(compressed::CHUNK_SPLATS);
     if chunks.len() < needed {
         return Err(fail(format!(

@@ -51,24 +51,11 @@ pub struct ChunkColumns {
 
 impl ChunkColumns {
     pub fn new(chunk: &Element) -> Result<Self, String> {
-        let require = |name: &str| {
-            chunk
-                .find(name)
-                .ok_or_else(|| format!("chunk property `{name}` is missing"))
-        };
-        let mut bounds = [0; 12];
-        for (slot, name) in bounds.iter_mut().zip(BOUNDS) {
-            *slot = require(name)?;
-        }
+        let bounds = chunk.require_all(BOUNDS)?;
         // Colour bounds come all together or not at all (then colours span 0…1).
-        let colour = if chunk.find(COLOUR_BOUNDS[0]).is_some() {
-            let mut colour = [0; 6];
-            for (slot, name) in colour.iter_mut().zip(COLOUR_BOUNDS) {
-                *slot = require(name)?;
-            }
-            Some(colour)
-        } else {
-            None
+        let colour = match chunk.find(COLOUR_BOUNDS[0]) {
+            Some(_) => Some(chunk.require_all(COLOUR_BOUNDS)?),
+            None => None,
         };
         Ok(Self { bounds, colour })
     }
