@@ -26,7 +26,7 @@ enum Command {
     Info,
     /// Render a 3DGS .ply file or an avatar to a PNG, framed by an orbit camera.
     Render {
-        /// A 3DGS splat file.
+        /// A splat file: 3DGS PLY (standard or PlayCanvas's compressed layout) or antimatter15's .splat
         #[arg(long, required_unless_present = "avatar", conflicts_with = "avatar")]
         ply: Option<PathBuf>,
         /// An avatar file (.guava), posed on the default body.
@@ -186,7 +186,7 @@ fn run(cli: Cli) -> Result<()> {
             let is_avatar = avatar.is_some();
             let (cloud, name, tracked) = match (ply, avatar) {
                 (Some(ply), _) => {
-                    let cloud = guava::gaussians::ply::read(&ply)?;
+                    let cloud = guava::gaussians::read_file(&ply)?;
                     (cloud, ply.display().to_string(), None)
                 }
                 (None, Some(avatar)) => {

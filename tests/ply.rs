@@ -1,5 +1,6 @@
-//! 3DGS PLY in and out: round trips, files written the way the original 3DGS code writes them,
-//! PlayCanvas's compressed layout against PlayCanvas's own decoder, and malformed files.
+//! Splat files in and out: 3DGS PLY round trips, files written the way the original 3DGS code
+//! writes them, PlayCanvas's compressed PLY and antimatter15's `.splat` against PlayCanvas's own
+//! decoder (splat-transform), and malformed files.
 
 use guava::gaussians::ply::{self, SH_C0};
 use guava::gaussians::synthetic::BallCloud;
@@ -156,7 +157,7 @@ fn splat_transform_fixture(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// tools/make_compressed_ply_fixture.py compressed 1,000 random Gaussians with degree-1 SH into
+/// tools/make_splat_file_fixtures.py compressed 1,000 random Gaussians with degree-1 SH into
 /// four chunks (the last partial) with PlayCanvas's splat-transform, and had it decode the file
 /// back to the standard layout. Our reading of the compressed file must match that decoding.
 /// Both decode in f64 and round once to f32; what differs is where the standard file's logit,
@@ -235,4 +236,82 @@ fn malformed_compressed_files_name_the_problem() {
             .to_string();
         assert!(err.contains(name) && err.contains(expect), "{name}: {err}");
     }
+}
+
+/// 256 random Gaussians packed into antimatter15's `.splat` by tools/make_splat_file_fixtures.py
+/// (as his converter packs them), read by `gaussians::read_file`, against the source cloud and
+/// against splat-transform's decoding of the same file.
+#[test]
+fn dot_splat_files_read_within_their_quantisation() {
+    let ours =
+        guava::gaussians::read_file(&splat_transform_fixture("cloud.splat")).expect(".splat");
+    let source = ply::read(&splat_transform_fixture("splat_source.ply")).expect("source");
+    let theirs = ply::read(&splat_transform_fixture("splat_decoded.ply")).expect("decoded");
+    assert_eq!((ours.len(), ours.channels), (256, 3));
+    assert_eq!((theirs.len(), source.len()), (256, 256));
+    let near = |a: &[f32], b: &[f32], tol: f32| a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol);
+    for i in 0..ours.len() {
+        // Positions and scales are f32 in the file: exact (scales up to the source's exp in f32).
+        assert_eq!(ours.positions[i], source.positions[i], "splat {i}");
+        assert!(near(
+            &ours.scales[i],
+            &source.scales[i],
+            1e-6 * source.scales[i][0].max(1.0)
+        ));
+        // Colour and opacity are truncated to 1/255 steps; colours beyond [0, 1] are clipped.
+        let colour: Vec<f32> = source
+            .features_of(i)
+            .iter()
+            .map(|c| c.clamp(0.0, 1.0))
+            .collect();
+        for (got, want) in ours.features_of(i).iter().zip(&colour) {
+            assert!(
+                (0.0..=1.0 / 255.0 + 1e-6).contains(&(want - got)),
+                "splat {i}: {got} vs {want}"
+            );
+        }
+        let opacity_lost = source.opacities[i] - ours.opacities[i];
+        assert!(
+            (0.0..=1.0 / 255.0 + 1e-6).contains(&opacity_lost),
+            "splat {i}: {opacity_lost}"
+        );
+        // Each quaternion component is truncated to 1/128 before normalising: 2/128 bounds it.
+        assert!(
+            near(&ours.rotations[i], &source.rotations[i], 2.0 / 128.0),
+            "splat {i}"
+        );
+
+        // splat-transform decodes the same bytes: identical but for f32 activation rounding and
+        // its opacity clamp to [1e-6, 1 − 1e-6]; its rotations are b/127.5 − 1 where antimatter15's
+        // viewer (and we) take (b − 128)/128, which differ by under 0.01 once normalised.
+        assert!(
+            near(ours.features_of(i), theirs.features_of(i), 2e-6),
+            "splat {i}"
+        );
+        assert!(
+            near(&ours.opacities[i..=i], &theirs.opacities[i..=i], 2e-6),
+            "splat {i}"
+        );
+        assert!(near(
+            &ours.scales[i],
+            &theirs.scales[i],
+            2e-6 * ours.scales[i][0].max(1.0)
+        ));
+        assert!(
+            near(&ours.rotations[i], &theirs.rotations[i], 0.01),
+            "splat {i}"
+        );
+    }
+    // A file that is not whole records names the problem.
+    let path = temp("cut.splat");
+    let bytes = std::fs::read(splat_transform_fixture("cloud.splat")).expect("fixture");
+    std::fs::write(&path, &bytes[..bytes.len() - 5]).expect("write");
+    let err = guava::gaussians::read_file(&path)
+        .expect_err("cut")
+        .to_string();
+    std::fs::remove_file(&path).ok();
+    assert!(
+        err.contains("cut.splat") && err.contains("not a whole number of 32-byte splats"),
+        "{err}"
+    );
 }

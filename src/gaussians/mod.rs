@@ -2,7 +2,36 @@
 //! the splatting pass draws. Attributes are stored activated (linear scale, opacity in \[0, 1\]).
 
 pub mod ply;
+pub mod splat;
 pub mod synthetic;
+
+use std::path::{Path, PathBuf};
+
+/// A splat file that could not be read or written, naming the file. The I/O error is part of the
+/// message, not a chained source, so `{:#}` does not print it twice.
+#[derive(Debug, thiserror::Error)]
+pub enum CloudFileError {
+    #[error("{path}: {error}")]
+    Io {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    #[error("{path}: {problem}")]
+    Format { path: PathBuf, problem: String },
+}
+
+/// Reads a splat file by its extension: antimatter15's `.splat`, else 3DGS PLY (standard or
+/// PlayCanvas's compressed layout).
+pub fn read_file(path: &Path) -> Result<GaussianCloud, CloudFileError> {
+    let is_splat = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("splat"));
+    if is_splat {
+        splat::read(path)
+    } else {
+        ply::read(path)
+    }
+}
 
 /// Gaussian-major storage; `features[i * channels + c]` is channel `c` of Gaussian `i`.
 #[derive(Clone, Debug, Default, PartialEq)]

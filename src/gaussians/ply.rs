@@ -9,24 +9,12 @@
 
 mod compressed;
 
-use super::{GaussianCloud, MAX_CHANNELS};
+use super::{CloudFileError, GaussianCloud, MAX_CHANNELS};
 use std::io::{BufRead, BufReader, Write};
-use std::path::{Path, PathBuf};
-use thiserror::Error;
+use std::path::Path;
 
 /// Degree-0 spherical-harmonic constant: colour = 0.5 + SH_C0 · f_dc.
 pub const SH_C0: f32 = 0.282_094_8;
-
-#[derive(Debug, Error)]
-pub enum PlyError {
-    #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    #[error("{path}: {problem}")]
-    Format { path: PathBuf, problem: String },
-}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Encoding {
@@ -134,18 +122,18 @@ fn sigmoid(x: f32) -> f32 {
     1.0 / (1.0 + (-x).exp())
 }
 
-pub fn read(path: &Path) -> Result<GaussianCloud, PlyError> {
-    let file = std::fs::File::open(path).map_err(|source| PlyError::Io {
+pub fn read(path: &Path) -> Result<GaussianCloud, CloudFileError> {
+    let file = std::fs::File::open(path).map_err(|error| CloudFileError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     })?;
     read_from(BufReader::new(file), path)
 }
 
 /// Reads from any stream; `path` only names the source in errors. Reads the standard 3DGS layout
 /// and PlayCanvas's compressed one (vertices with `packed_position`, see [`compressed`]).
-pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<GaussianCloud, PlyError> {
-    let fail = |problem: String| PlyError::Format {
+pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<GaussianCloud, CloudFileError> {
+    let fail = |problem: String| CloudFileError::Format {
         path: path.to_path_buf(),
         problem,
     };
@@ -183,9 +171,9 @@ fn for_each_row(
     input: &mut impl BufRead,
     encoding: Encoding,
     element: &Element,
-    fail: &impl Fn(String) -> PlyError,
-    mut each: impl FnMut(usize, &[f64]) -> Result<(), PlyError>,
-) -> Result<(), PlyError> {
+    fail: &impl Fn(String) -> CloudFileError,
+    mut each: impl FnMut(usize, &[f64]) -> Result<(), CloudFileError>,
+) -> Result<(), CloudFileError> {
     let name = &element.name;
     if element.has_list {
         return Err(fail(format!(
@@ -244,8 +232,8 @@ fn read_standard(
     input: &mut impl BufRead,
     encoding: Encoding,
     vertex: &Element,
-    fail: &impl Fn(String) -> PlyError,
-) -> Result<GaussianCloud, PlyError> {
+    fail: &impl Fn(String) -> CloudFileError,
+) -> Result<GaussianCloud, CloudFileError> {
     let columns = |names| vertex.require_all(names).map_err(fail);
     let pos = columns(["x", "y", "z"])?;
     let opacity = vertex.require("opacity").map_err(fail)?;
@@ -296,8 +284,8 @@ fn read_compressed(
     encoding: Encoding,
     vertex: &Element,
     chunks: &[compressed::Chunk],
-    fail: &impl Fn(String) -> PlyError,
-) -> Result<GaussianCloud, PlyError> {
+    fail: &impl Fn(String) -> CloudFileError,
+) -> Result<GaussianCloud, CloudFileError> {
     let packed = vertex.require_all(compressed::PACKED).map_err(fail)?;
     let needed = vertex.count.div_ceil(compressed::CHUNK_SPLATS);
     if chunks.len() < needed {
@@ -399,13 +387,13 @@ fn read_header(input: &mut impl BufRead) -> Result<Header, String> {
 
 /// Writes binary little-endian 3DGS PLY via a temporary file renamed into place, so an
 /// interrupted write never leaves a half-written file under `path`.
-pub fn write(path: &Path, cloud: &GaussianCloud) -> Result<(), PlyError> {
-    let io = |source| PlyError::Io {
+pub fn write(path: &Path, cloud: &GaussianCloud) -> Result<(), CloudFileError> {
+    let io = |error| CloudFileError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     };
     if cloud.channels < 3 {
-        return Err(PlyError::Format {
+        return Err(CloudFileError::Format {
             path: path.to_path_buf(),
             problem: format!(
                 "3DGS PLY needs at least 3 channels (RGB), the cloud has {}",

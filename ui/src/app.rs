@@ -498,7 +498,7 @@ impl GuavaApp {
                 return self.open_wholebody(path);
             }
             _ if path.is_dir() => Kind::Networks,
-            Some("ply") => Kind::Cloud,
+            Some("ply" | "splat") => Kind::Cloud,
             Some("glb") => Kind::Body,
             Some("npz") => Kind::Npz,
             Some("json" | "csv") => Kind::Motion,
@@ -549,7 +549,7 @@ impl GuavaApp {
                         })
                         .map(|m| Loaded::Networks(Box::new(m)))
                 }
-                Kind::Cloud => guava::gaussians::ply::read(&worker_path)
+                Kind::Cloud => guava::gaussians::read_file(&worker_path)
                     .map(Loaded::Cloud)
                     .map_err(|e| e.to_string()),
                 Kind::Motion => open_motion(&worker_path)
@@ -869,7 +869,7 @@ impl GuavaApp {
                 cloud.channels
             ));
         } else {
-            self.set_scene(file_name(path), "3DGS PLY file", cloud);
+            self.set_scene(file_name(path), "splat file", cloud);
         }
     }
 
@@ -894,9 +894,10 @@ impl GuavaApp {
                 if ui.button("Open…").clicked() {
                     if let Some(path) = rfd::FileDialog::new()
                         .add_filter(
-                            "3DGS PLY, body template, avatar, photo or motion",
+                            "Splats (PLY, .splat), body template, avatar, photo or motion",
                             &[
-                                "ply", "glb", "guava", "png", "jpg", "jpeg", "json", "csv", "npz",
+                                "ply", "splat", "glb", "guava", "png", "jpg", "jpeg", "json",
+                                "csv", "npz",
                             ],
                         )
                         .pick_file()
