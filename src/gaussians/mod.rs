@@ -20,6 +20,13 @@ pub enum CloudFileError {
     Format { path: PathBuf, problem: String },
 }
 
+/// A file's quaternion at unit length, as 3DGS's `get_rotation` normalises on reading; an all-zero
+/// one is kept as it is.
+fn unit_quaternion(q: [f32; 4]) -> [f32; 4] {
+    let norm = q.iter().map(|c| c * c).sum::<f32>().sqrt();
+    if norm > 0.0 { q.map(|c| c / norm) } else { q }
+}
+
 /// Reads a splat file by its extension: antimatter15's `.splat`, else 3DGS PLY (standard or
 /// PlayCanvas's compressed layout).
 pub fn read_file(path: &Path) -> Result<GaussianCloud, CloudFileError> {

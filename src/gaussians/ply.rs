@@ -9,7 +9,7 @@
 
 mod compressed;
 
-use super::{CloudFileError, GaussianCloud, MAX_CHANNELS};
+use super::{CloudFileError, GaussianCloud, MAX_CHANNELS, unit_quaternion};
 use std::io::{BufRead, BufReader, Write};
 use std::path::Path;
 
@@ -257,9 +257,6 @@ fn read_standard(
     let mut feats = vec![0.0f32; channels];
     for_each_row(input, encoding, vertex, fail, |_, row| {
         let get = |i: usize| row[i] as f32;
-        let q = rot.map(get);
-        let norm = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
-        let q = if norm > 0.0 { q.map(|c| c / norm) } else { q };
         for c in 0..3 {
             feats[c] = 0.5 + SH_C0 * get(dc[c]);
         }
@@ -268,7 +265,7 @@ fn read_standard(
         }
         cloud.push(
             pos.map(get),
-            q,
+            unit_quaternion(rot.map(get)),
             scale.map(|i| get(i).exp()),
             sigmoid(get(opacity)),
             &feats,

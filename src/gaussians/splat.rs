@@ -4,7 +4,7 @@
 //! z, each component of the unit quaternion as 128 + 128·q). Rotations decode as (b − 128)/128,
 //! as his viewer does, and are normalised.
 
-use super::{CloudFileError, GaussianCloud};
+use super::{CloudFileError, GaussianCloud, unit_quaternion};
 use std::path::Path;
 
 /// Bytes per splat.
@@ -37,10 +37,9 @@ pub fn decode(bytes: &[u8]) -> Result<GaussianCloud, String> {
         };
         let unit = |b: u8| f32::from(b) / 255.0;
         let q = [28, 29, 30, 31].map(|at| (f32::from(record[at]) - 128.0) / 128.0);
-        let norm = q.iter().map(|c| c * c).sum::<f32>().sqrt();
         cloud.push(
             [f32_at(0), f32_at(1), f32_at(2)],
-            if norm > 0.0 { q.map(|c| c / norm) } else { q },
+            unit_quaternion(q),
             [f32_at(3), f32_at(4), f32_at(5)],
             unit(record[27]),
             &[unit(record[24]), unit(record[25]), unit(record[26])],
