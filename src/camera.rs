@@ -80,6 +80,29 @@ impl Camera {
         }
     }
 
+    /// The same view at `scale` times the resolution (at least 1×1): fewer pixels for the same
+    /// picture.
+    pub fn scaled(&self, scale: f32) -> Self {
+        if scale == 1.0 {
+            return *self;
+        }
+        let width = ((self.width as f32 * scale).round() as u32).max(1);
+        let height = ((self.height as f32 * scale).round() as u32).max(1);
+        let (sx, sy) = (
+            width as f32 / self.width as f32,
+            height as f32 / self.height as f32,
+        );
+        Self {
+            width,
+            height,
+            fx: self.fx * sx,
+            fy: self.fy * sy,
+            cx: self.cx * sx,
+            cy: self.cy * sy,
+            ..*self
+        }
+    }
+
     /// View matrix looking from `eye` at `target`, `up` pointing up on screen (camera −y).
     pub fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
         let forward = (target - eye).normalize();
@@ -115,13 +138,6 @@ impl Camera {
     /// Metres covered by one pixel at view depth `z` (the larger of the two axes).
     pub fn pixel_footprint(&self, z: f32) -> f32 {
         z / self.fx.min(self.fy)
-    }
-
-    pub fn tiles(&self) -> (u32, u32) {
-        (
-            self.width.div_ceil(crate::render::TILE_SIZE),
-            self.height.div_ceil(crate::render::TILE_SIZE),
-        )
     }
 
     /// The reference's EWA Jacobian clamp, `|x/z| ≤ 1.3·tan_fovx` (`forward.cu:computeCov2D`),

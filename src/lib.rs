@@ -5,7 +5,6 @@
 
 pub mod atomic_file;
 pub mod avatar;
-pub mod bench;
 pub mod body;
 pub mod camera;
 pub mod fit;
@@ -15,6 +14,11 @@ pub mod guava_mode;
 pub mod keypoints;
 pub mod npz;
 pub mod onnx;
+pub mod photo;
+pub mod pipeline;
+pub mod progress;
+pub mod raster;
 pub mod reconstruct;
 pub mod render;
+pub mod synthetic;
 pub mod tracking;

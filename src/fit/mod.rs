@@ -31,13 +31,16 @@ pub use hand::{BodyPoint, hand_targets};
 
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 
-use crate::body::{BodyModel, BodyPose, EhmModel, HEAD_SIZE, Landmark, PointPoser, TargetGroup};
+use crate::body::{
+    BodyModel, BodyPose, EhmModel, HEAD_SIZE, Landmark, PointPoser, TargetGroup,
+    coco_limb_keypoints,
+};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
 use crate::keypoints::{
     Detections, FACE_EYE_CORNERS, FaceLandmarker, FaceLandmarks, HandLandmarks, Iris, Keypoint,
-    Side, coco_limb_keypoints,
+    Side,
 };
-use crate::reconstruct::SourceView;
+use crate::tracking::SourceView;
 
 /// The joints the body stage turns (besides the root).
 pub const FITTED_JOINTS: [&str; 11] = [

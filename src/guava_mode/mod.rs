@@ -6,4 +6,4 @@ pub mod reconstruct;
 pub mod sample;
 
 pub use models::{DecodedGaussians, Dims, Encoded, GuavaModels, GuavaModelsError};
-pub use reconstruct::{GuavaReport, reconstruct_guava, reconstruct_guava_file, uv_map};
+pub use reconstruct::{reconstruct_guava, uv_map};

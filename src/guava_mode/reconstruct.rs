@@ -9,46 +9,22 @@
 //! ([`uv_map`]).
 
 use std::collections::BTreeMap;
-use std::path::Path;
-use std::time::{Duration, Instant};
 
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec3};
 
 use super::models::GuavaModels;
 use super::sample::{Padding, grid_sample, project_ndc};
 use crate::avatar::{Avatar, AvatarKind, LocalGaussians, UvGaussians};
 use crate::body::{EhmModel, Posable, PosedBody};
 use crate::camera::Camera;
-use crate::fit::{FitReport, fit_ehm_detections};
-use crate::keypoints::{Keypoint, Landmarkers};
-use crate::reconstruct::framing::{Framing, SourcePhoto, Square};
-use crate::reconstruct::raster::rasterize;
-use crate::reconstruct::{
-    ReconstructError, SOURCE_SIZE, SourceImage, SourceView, Stage, StageClock, Tracked, UvMap,
-    fit_error,
-};
-use crate::tracking::{EhmIdentityRecord, Tracking};
+use crate::photo::SourceImage;
+use crate::progress::{Stage, StageClock};
+use crate::raster::rasterize;
+use crate::reconstruct::{ReconstructError, Report, UvMap};
+use crate::tracking::{EhmIdentityRecord, SourceView};
 
 /// UV Gaussians at or below this opacity are dropped (`cfg.opacity_threshold`).
 pub const PRUNE_OPACITY: f32 = 0.001;
-
-#[derive(Clone, Debug, Default)]
-pub struct GuavaReport {
-    pub timings: Vec<(Stage, Duration)>,
-    /// Triangles that win at least one pixel of the source view.
-    pub visible_faces: usize,
-    pub texels: usize,
-    /// Texels on visible faces that project into the image (nonzero features).
-    pub observed_texels: usize,
-    pub pruned: usize,
-    /// The source pose's vertices in front of the camera, projected into the source view in
-    /// units of the square's side (so the user can see whether the tracking fits the photo).
-    pub projected: Vec<Vec2>,
-    /// How the source view was fitted to the photo, when it was.
-    pub fit: Option<FitReport>,
-    /// The pose model's body keypoints on the photo, when it ran.
-    pub keypoints: Vec<Keypoint>,
-}
 
 /// The EHM body's texel map at `size`²: the reference's own (OpenCV's fill, stored by
 /// `tools/convert_ehm.py`) when the body carries one of that size, else our rasterization of its
@@ -81,7 +57,7 @@ pub fn reconstruct_guava(
     image: &SourceImage,
     source_name: &str,
     progress: &mut dyn FnMut(Stage) -> bool,
-) -> Result<(Avatar, GuavaReport), ReconstructError> {
+) -> Result<(Avatar, Report), ReconstructError> {
     let d = models.dims;
     let n = body.body.template.len();
     let mut mismatch = Vec::new();
@@ -110,7 +86,7 @@ pub fn reconstruct_guava(
             mismatch.join("; ")
         )));
     }
-    let mut report = GuavaReport {
+    let mut report = Report {
         texels: uv.len(),
         ..Default::default()
     };
@@ -133,14 +109,6 @@ pub fn reconstruct_guava(
     clock.start(Stage::Rasterize, progress)?;
     let camera = Camera::guava(w2c, d.features as u32, invtanfov);
     let fragments = rasterize(&posed.vertices, &body.triangles, &camera);
-    let side = d.features as f32;
-    report.projected = posed
-        .vertices
-        .iter()
-        .map(|&v| camera.project(v))
-        .filter(|p| p.z > 0.0 && p.is_finite())
-        .map(|p| Vec2::new(p.x, p.y) / side)
-        .collect();
     let mut visible = vec![false; body.triangles.len()];
     for &t in fragments.triangle.iter().filter(|&&t| t >= 0) {
         visible[t as usize] = true;
@@ -167,7 +135,7 @@ pub fn reconstruct_guava(
         d.pixel_channels,
         d.features,
     );
-    report.observed_texels = observed;
+    report.observed = observed;
 
     clock.start(Stage::DecodeVertices, progress)?;
     let vertex = models.decode_vertices(sampled, &encoded, cam_dir)?;
@@ -219,114 +187,6 @@ pub fn reconstruct_guava(
     };
     report.timings = clock.finish();
     Ok((avatar, report))
-}
-
-/// Reads `photo` at the encoder's size, masks it (its alpha, else the pose model's person
-/// segmentation when `landmarkers` are given, else refused: GUAVA's encoder was trained on
-/// masked photos), gets the source view on `body` and runs [`reconstruct_guava`]; also returns
-/// that view. The view is frame 0 of a tracking file (with the tracking's EHM identity), or a fit
-/// of the body's linear form ([`EhmModel::linearised`]) to the keypoint models' points on the
-/// photo (with the body's own identity), or given. Every error names its file.
-pub fn reconstruct_guava_file(
-    models: &mut GuavaModels,
-    body: &EhmModel,
-    uv: &UvMap,
-    photo: &Path,
-    tracked: Tracked,
-    mut landmarkers: Option<&mut Landmarkers>,
-    progress: &mut dyn FnMut(Stage) -> bool,
-) -> Result<(Avatar, GuavaReport, SourceView), ReconstructError> {
-    let file = photo.display().to_string();
-    if matches!(tracked, Tracked::Fit) && landmarkers.is_none() {
-        return Err(ReconstructError::Image {
-            file,
-            problem: "has no tracking file, and fitting it needs the keypoint models, which did \
-                      not load"
-                .into(),
-        });
-    }
-    let started = Instant::now();
-    let given = match tracked {
-        Tracked::File(tracking) => {
-            let name = tracking.display().to_string();
-            let tracking = Tracking::load(tracking)?;
-            let view = SourceView::from_tracking(&tracking, body, &name)?;
-            // The tracker's skeleton (joint offsets, head and hand scale) belongs to this person:
-            // the body is built with it, so sampling sees the tracked body.
-            let identity = tracking
-                .identity
-                .ehm
-                .as_ref()
-                .map_or_else(Default::default, EhmIdentityRecord::to_identity);
-            Some((view, identity))
-        }
-        Tracked::Given(view) => Some((view, body.identity.clone())),
-        Tracked::Fit => None,
-    };
-    // The keypoint models see the photo at the source size, the encoder at its own.
-    // A fitted photo is framed as EHM-Tracker framed the photos GUAVA learned from.
-    let square = given
-        .as_ref()
-        .map_or(Square::Fitted(Framing::AroundPerson), |(view, _)| {
-            Square::Tracked {
-                crop: view.crop,
-                points: false,
-            }
-        });
-    let read = SourcePhoto::read(photo, square, landmarkers.as_deref_mut(), progress)?;
-    let size = models.dims.image as u32;
-    let mut image =
-        SourceImage::from_rgba_at(&read.pixels, read.crop, read.has_alpha, &file, size)?;
-    if image.mask.is_none() {
-        let found = read
-            .detections
-            .as_ref()
-            .ok_or_else(|| ReconstructError::Image {
-                file: file.clone(),
-                problem:
-                    "has no alpha channel, and its person mask needs the pose model, which did \
-                      not load"
-                        .into(),
-            })?;
-        image.apply_mask(found.pose.mask_at(image.size as usize));
-    }
-    let mut fit = None;
-    let (view, identity) = match given {
-        Some(given) => given,
-        None => {
-            let found = read
-                .detections
-                .as_ref()
-                .expect("a fitted photo's keypoints");
-            let face = &mut landmarkers.expect("checked above").face;
-            let (mut view, report) = fit_ehm_detections(body, found, face, SOURCE_SIZE)
-                .map_err(|e| fit_error(&file, e))?;
-            view.crop = read.crop;
-            fit = Some(report);
-            (view, body.identity.clone())
-        }
-    };
-    let fit_time = started.elapsed();
-    let source = photo.file_name().map_or_else(
-        || photo.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    );
-    let (avatar, mut report) = if identity == body.identity {
-        reconstruct_guava(models, body, uv, &view, &image, &source, progress)?
-    } else {
-        let mut tracked = body.clone();
-        tracked.identity = identity;
-        reconstruct_guava(models, &tracked, uv, &view, &image, &source, progress)?
-    };
-    if read.detections.is_some() {
-        report.timings.insert(0, (Stage::Fit, fit_time));
-    }
-    report.fit = fit;
-    report.keypoints = read
-        .detections
-        .map(|d| d.pose.keypoints)
-        .unwrap_or_default();
-    Ok((avatar, report, view))
 }
 
 /// The source camera as GUAVA's sampling sees it.

@@ -9,7 +9,7 @@ use glam::Vec2;
 use super::model::SquareModel;
 use super::{Roi, sigmoid};
 use crate::onnx::{OnnxError, OnnxRuntime};
-use crate::reconstruct::SourceImage;
+use crate::photo::SourceImage;
 
 pub const FACE_MODEL_PATH: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),

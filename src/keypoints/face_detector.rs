@@ -9,7 +9,7 @@ use std::path::Path;
 use super::Roi;
 use super::ssd::{Detection, SsdLayout, SsdModel};
 use crate::onnx::{OnnxError, OnnxRuntime};
-use crate::reconstruct::SourceImage;
+use crate::photo::SourceImage;
 
 pub const FACE_DETECTOR_MODEL_PATH: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),

@@ -10,7 +10,7 @@ use glam::Vec2;
 use super::model::SquareModel;
 use super::{PoseKeypoints, Roi};
 use crate::onnx::{OnnxError, OnnxRuntime};
-use crate::reconstruct::SourceImage;
+use crate::photo::SourceImage;
 
 pub const HAND_MODEL_PATH: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),

@@ -11,7 +11,7 @@ use glam::Vec2;
 use super::model::SquareModel;
 use super::{FaceLandmarks, Roi, Side};
 use crate::onnx::{OnnxError, OnnxRuntime};
-use crate::reconstruct::SourceImage;
+use crate::photo::SourceImage;
 
 pub const IRIS_MODEL_PATH: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),

@@ -30,10 +30,7 @@ pub use hand::{HAND_INPUT, HAND_MODEL_PATH, HAND_POINTS, HandLandmarker, HandLan
 pub use iris::{IRIS_INPUT, IRIS_MODEL_PATH, Iris, IrisLandmarker};
 pub use model::Rgb8;
 pub use palm::{PALM_INPUT, PALM_MODEL_PATH, PalmDetection, PalmDetector};
-pub use pose::{
-    COCO_FROM_MEDIAPIPE, POSE_INPUT, POSE_MODEL_PATH, PoseKeypoints, PoseLandmarker,
-    coco_limb_keypoints,
-};
+pub use pose::{COCO_FROM_MEDIAPIPE, POSE_INPUT, POSE_MODEL_PATH, PoseKeypoints, PoseLandmarker};
 pub use roi::Roi;
 pub use simcc::{SimccCrop, SimccLandmarker, SimccPoints};
 pub use ssd::Detection;
@@ -45,7 +42,7 @@ use std::path::Path;
 use glam::Vec2;
 
 use crate::onnx::{OnnxError, OnnxRuntime};
-use crate::reconstruct::SourceImage;
+use crate::photo::SourceImage;
 
 /// One error naming every file of `files` that `dir` (`what`) lacks.
 fn check_folder(dir: &Path, files: &[&str], what: &str) -> Result<(), OnnxError> {

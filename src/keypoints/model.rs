@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use crate::onnx::{OnnxError, OnnxRuntime, Session, TensorF32};
-use crate::reconstruct::SourceImage;
+use crate::photo::SourceImage;
 
 pub(super) struct SquareModel {
     session: Session,

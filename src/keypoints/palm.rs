@@ -11,7 +11,7 @@ use glam::Vec2;
 use super::Roi;
 use super::ssd::{Detection, SsdLayout, SsdModel};
 use crate::onnx::{OnnxError, OnnxRuntime};
-use crate::reconstruct::SourceImage;
+use crate::photo::SourceImage;
 
 pub const PALM_MODEL_PATH: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),

@@ -12,9 +12,10 @@ use glam::Vec2;
 
 use super::model::SquareModel;
 use super::{Keypoint, Roi, sigmoid};
+use crate::body::COCO_KEYPOINTS;
 use crate::onnx::{OnnxError, OnnxRuntime};
-use crate::reconstruct::SourceImage;
-use crate::reconstruct::fill::bilinear_clamped;
+use crate::photo::SourceImage;
+use crate::photo::bilinear_clamped;
 
 /// The converted model shipped in the repository.
 pub const POSE_MODEL_PATH: &str = concat!(
@@ -27,32 +28,20 @@ const LANDMARKS: usize = 39;
 /// The body landmarks among them (the rest are auxiliary).
 const BODY_LANDMARKS: usize = 33;
 
-/// The COCO body keypoints by the default body's landmark names, with their MediaPipe index.
-pub const COCO_FROM_MEDIAPIPE: [(&str, usize); 17] = [
-    ("nose", 0),
-    ("left_eye", 2),
-    ("right_eye", 5),
-    ("left_ear", 7),
-    ("right_ear", 8),
-    ("left_shoulder", 11),
-    ("right_shoulder", 12),
-    ("left_elbow", 13),
-    ("right_elbow", 14),
-    ("left_wrist", 15),
-    ("right_wrist", 16),
-    ("left_hip", 23),
-    ("right_hip", 24),
-    ("left_knee", 25),
-    ("right_knee", 26),
-    ("left_ankle", 27),
-    ("right_ankle", 28),
-];
-
-/// The COCO keypoints on the limbs, shoulders to ankles (all of [`COCO_FROM_MEDIAPIPE`] but its
-/// first five, which are on the head); on SMPL-X they are joints of the same names.
-pub fn coco_limb_keypoints() -> impl Iterator<Item = &'static str> {
-    COCO_FROM_MEDIAPIPE[5..].iter().map(|&(name, _)| name)
-}
+/// The COCO body keypoints ([`COCO_KEYPOINTS`], the body's landmark names) with their MediaPipe
+/// index.
+pub const COCO_FROM_MEDIAPIPE: [(&str, usize); 17] = {
+    const INDEX: [usize; 17] = [
+        0, 2, 5, 7, 8, 11, 12, 13, 14, 15, 16, 23, 24, 25, 26, 27, 28,
+    ];
+    let mut out = [("", 0); 17];
+    let mut k = 0;
+    while k < 17 {
+        out[k] = (COCO_KEYPOINTS[k], INDEX[k]);
+        k += 1;
+    }
+    out
+};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct PoseKeypoints {

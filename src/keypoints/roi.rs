@@ -6,8 +6,8 @@ use glam::{Vec2, Vec3};
 
 use super::{FACE_EYE_CORNERS, Keypoint, PoseKeypoints, Side};
 use crate::onnx::OnnxError;
-use crate::reconstruct::SourceImage;
-use crate::reconstruct::fill::bilinear_clamped;
+use crate::photo::SourceImage;
+use crate::photo::bilinear_clamped;
 
 /// MediaPipe's margin around a face: the crop is 1.5× the face's longer side.
 const FACE_MARGIN: f32 = 1.5;

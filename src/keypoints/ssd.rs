@@ -12,7 +12,7 @@ use glam::Vec2;
 use super::Roi;
 use super::model::SquareModel;
 use crate::onnx::{OnnxError, OnnxRuntime};
-use crate::reconstruct::SourceImage;
+use crate::photo::SourceImage;
 
 /// Boxes overlapping a cluster's best one by more than this (IoU) join the cluster.
 const NMS_OVERLAP: f32 = 0.3;

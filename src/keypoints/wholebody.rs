@@ -20,7 +20,7 @@ use super::simcc::{SimccLandmarker, SimccPoints};
 use super::yolox::{PersonBox, PersonDetector};
 use super::{COCO_FROM_MEDIAPIPE, Keypoint, Roi, check_folder};
 use crate::onnx::{OnnxError, OnnxRuntime};
-use crate::reconstruct::SourceImage;
+use crate::photo::SourceImage;
 
 /// EHM-Tracker's file names for the person detector and the keypoint model.
 pub const WHOLEBODY_FILES: [&str; 2] = ["yolox_l.onnx", "dw-ll_ucoco_384.onnx"];

@@ -16,10 +16,11 @@ use std::collections::BTreeMap;
 
 use glam::{Vec2, Vec3};
 
-use super::fill::{FilledTexture, bilinear_clamped};
+use super::fill::FilledTexture;
 use super::uv_map::UvMap;
 use crate::avatar::{Avatar, AvatarKind, LocalGaussians, UvGaussians};
 use crate::body::{BodyModel, PosedBody, triangle_frames};
+use crate::photo::bilinear_clamped;
 
 pub const DEFAULT_CHANNELS: usize = 4;
 

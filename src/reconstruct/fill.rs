@@ -7,6 +7,7 @@ use glam::Vec3;
 
 use super::texture::UvTexture;
 use super::uv_map::UvMap;
+use crate::photo::bilinear_clamped;
 
 /// Where a texel's colour came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -118,21 +119,4 @@ fn push_pull(size: usize, rgb: &[[f32; 3]], weight: &[f32]) -> Vec<[f32; 3]> {
     coarse
         .map(|(_, c)| c.iter().map(Vec3::to_array).collect())
         .unwrap_or_default()
-}
-
-/// Bilinear interpolation on a `size`² grid at centre-at-integer `(x, y)`, clamped to the edge;
-/// `at` reads texel `row · size + column` (colours, or scalars such as a mask).
-pub(crate) fn bilinear_clamped<T>(size: usize, x: f32, y: f32, at: impl Fn(usize) -> T) -> T
-where
-    T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
-{
-    let lerp = |a: T, b: T, t: f32| a * (1.0 - t) + b * t;
-    let max = (size - 1) as f32;
-    let (x, y) = (x.clamp(0.0, max), y.clamp(0.0, max));
-    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
-    let (x1, y1) = ((x0 + 1).min(size - 1), (y0 + 1).min(size - 1));
-    let (fx, fy) = (x - x0 as f32, y - y0 as f32);
-    let top = lerp(at(y0 * size + x0), at(y0 * size + x1), fx);
-    let bottom = lerp(at(y1 * size + x0), at(y1 * size + x1), fx);
-    lerp(top, bottom, fy)
 }

@@ -5,10 +5,10 @@
 
 use glam::Vec3;
 
-use super::raster::{Fragments, RASTER_NEAR};
-use super::source::SourceImage;
 use super::uv_map::UvMap;
 use crate::camera::Camera;
+use crate::photo::SourceImage;
+use crate::raster::{Fragments, RASTER_NEAR};
 
 /// A texel closer to the camera than the z-buffer by less than this many pixel footprints still
 /// counts as the visible surface: covers the depth change across one pixel on a surface inclined

@@ -9,8 +9,8 @@ use std::collections::HashMap;
 
 use glam::{Vec2, Vec3};
 
-use super::raster::cover;
 use crate::body::BodyModel;
+use crate::raster::cover;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct UvMap {

@@ -52,3 +52,47 @@ pub struct SortPass {
     pub _pad: u32,
 }
 const _: () = assert!(size_of::<SortPass>() == 16);
+
+/// shaders/rig.wgsl: the counts of the two Gaussian sets.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct RigParams {
+    pub template_count: u32,
+    pub uv_count: u32,
+    pub _pad: [u32; 2],
+}
+const _: () = assert!(size_of::<RigParams>() == 16);
+
+/// A template Gaussian in its vertex's skinning frame.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct TemplateGaussian {
+    pub rot: [f32; 4],
+    pub scale: [f32; 3],
+    pub opacity: f32,
+}
+const _: () = assert!(size_of::<TemplateGaussian>() == 32);
+
+/// A UV Gaussian bound to its triangle.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct UvGaussian {
+    pub bary: [f32; 3],
+    pub triangle: u32,
+    pub offset: [f32; 3],
+    pub opacity: f32,
+    pub rot: [f32; 4],
+    pub scale: [f32; 3],
+    pub _pad: f32,
+}
+const _: () = assert!(size_of::<UvGaussian>() == 64);
+
+/// A posed vertex: its position and the linear part of its skinning transform (columns, each
+/// padded to four floats as WGSL's `mat3x3<f32>` is).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct PosedVertex {
+    pub position: [f32; 4],
+    pub skin: [[f32; 4]; 3],
+}
+const _: () = assert!(size_of::<PosedVertex>() == 64);

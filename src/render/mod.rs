@@ -7,13 +7,16 @@ pub mod pipelines;
 pub mod present;
 pub mod readback;
 pub mod reference;
+mod rig;
 mod scan;
 pub mod shader;
 mod sort;
 pub mod splatter;
 pub mod timing;
+pub mod view;
 
 pub use pipelines::{RasterTuning, SplatPipelines};
+pub use rig::GpuAvatar;
 pub use splatter::{Splatter, Stage};
 
 use crate::camera::Camera;
@@ -30,8 +33,25 @@ pub enum SplatError {
     TooManyGaussians { count: u64, channels: u32, max: u64 },
 }
 
+/// An avatar that could not be drawn: too big for the adapter, or posed on another body.
+#[derive(Debug, thiserror::Error)]
+pub enum AvatarRenderError {
+    #[error(transparent)]
+    Splat(#[from] SplatError),
+    #[error(transparent)]
+    Body(#[from] crate::avatar::BodyMismatch),
+}
+
 /// Tile side in pixels (`config.h`: BLOCK_X = BLOCK_Y = 16).
 pub const TILE_SIZE: u32 = 16;
+
+/// The tile grid covering `camera`'s image: columns, rows.
+pub fn tile_grid(camera: &Camera) -> (u32, u32) {
+    (
+        camera.width.div_ceil(TILE_SIZE),
+        camera.height.div_ceil(TILE_SIZE),
+    )
+}
 
 /// A rendered C-channel image on the CPU: channel-major planes like the reference's [C, H, W].
 #[derive(Clone, Debug, PartialEq)]
@@ -164,6 +184,37 @@ impl HeadlessRenderer {
         let (device, queue) = (&self.gpu.device, &self.gpu.queue);
         self.splatter.upload(device, queue, cloud)?;
         Ok(self.render_uploaded(camera, background))
+    }
+
+    /// Poses `avatar` on the GPU for `posed` (its body posed) and renders it: the frame path of
+    /// the viewer, headless. The avatar's constants go up once per splatter allocation.
+    pub fn render_avatar(
+        &mut self,
+        avatar: &mut GpuAvatar,
+        posed: &crate::body::PosedBody,
+        camera: &Camera,
+        background: &[f32],
+    ) -> Result<(SplatImage, RenderStats), AvatarRenderError> {
+        self.pose_avatar(avatar, posed)?;
+        Ok(self.render_uploaded(camera, background))
+    }
+
+    /// Attaches `avatar`, uploads `posed` and runs the rig pass, leaving the posed Gaussians in
+    /// the splatter.
+    pub fn pose_avatar(
+        &mut self,
+        avatar: &mut GpuAvatar,
+        posed: &crate::body::PosedBody,
+    ) -> Result<(), AvatarRenderError> {
+        let (device, queue) = (&self.gpu.device, &self.gpu.queue);
+        avatar.attach(device, queue, &mut self.splatter)?;
+        avatar.set_pose(queue, posed)?;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("headless rig"),
+        });
+        avatar.encode(&mut encoder);
+        queue.submit([encoder.finish()]);
+        Ok(())
     }
 
     /// Renders the cloud already uploaded (benchmarks upload once and render many times).

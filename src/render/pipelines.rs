@@ -155,6 +155,8 @@ pub struct SplatPipelines {
     pub(crate) ranges_layout: wgpu::BindGroupLayout,
     pub(crate) tile_ranges: wgpu::ComputePipeline,
     pub(crate) rasterize_layout: wgpu::BindGroupLayout,
+    pub(crate) rig_layout: wgpu::BindGroupLayout,
+    pub(crate) rig: wgpu::ComputePipeline,
     pub tuning: RasterTuning,
     rasterize: Mutex<HashMap<u32, wgpu::ComputePipeline>>,
 }
@@ -286,6 +288,20 @@ impl SplatPipelines {
                 Binding::OutputTexture,
             ],
         );
+        let rig_layout = bind_group_layout(
+            device,
+            "Rig",
+            &[
+                Uniform,
+                Storage { read_only: true },
+                Storage { read_only: true },
+                Storage { read_only: true },
+                Storage { read_only: true },
+                rw(),
+            ],
+        );
+        let m = shader::module(device, "rig.wgsl", shader::RIG, &[]);
+        let rig = compute_pipeline(device, "Rig", &rig_layout, &m, "main");
         Self {
             preprocess_layout,
             preprocess,
@@ -303,6 +319,8 @@ impl SplatPipelines {
             ranges_layout,
             tile_ranges,
             rasterize_layout,
+            rig_layout,
+            rig,
             tuning,
             rasterize: Mutex::new(HashMap::new()),
         }

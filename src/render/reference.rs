@@ -123,7 +123,7 @@ pub fn project(cloud: &GaussianCloud, i: usize, camera: &Camera) -> Result<Splat
     if !(radius.is_finite() && xy[0].is_finite() && xy[1].is_finite()) {
         return Err(Culled::Degenerate);
     }
-    let (tiles_x, tiles_y) = camera.tiles();
+    let (tiles_x, tiles_y) = super::tile_grid(camera);
     let tile = TILE_SIZE as f64;
     // C casts truncate toward zero; clamping to the grid makes that equal to floor here.
     let bound = |v: f64, n: u32| (v / tile).trunc().clamp(0.0, n as f64) as u32;
@@ -171,7 +171,7 @@ pub fn render(
     stats.visible = splats.len() as u64;
     // Per-tile lists in (depth, index) order: the stable sort of the reference's 64-bit keys.
     splats.sort_by(|a, b| a.depth.total_cmp(&b.depth).then(a.index.cmp(&b.index)));
-    let (tiles_x, tiles_y) = camera.tiles();
+    let (tiles_x, tiles_y) = super::tile_grid(camera);
     let mut tile_lists: Vec<Vec<usize>> = vec![Vec::new(); (tiles_x * tiles_y) as usize];
     for (k, s) in splats.iter().enumerate() {
         for ty in s.rect[1]..s.rect[3] {

@@ -17,6 +17,7 @@ pub const RASTERIZE_SHUFFLES: &str = concat!(
     include_str!("../../shaders/rasterize_fetch_shuffles.wgsl"),
     include_str!("../../shaders/rasterize.wgsl")
 );
+pub const RIG: &str = include_str!("../../shaders/rig.wgsl");
 pub const PRESENT: &str = include_str!("../../shaders/present.wgsl");
 pub const MESH: &str = include_str!("../../shaders/mesh.wgsl");
 
@@ -41,6 +42,7 @@ pub const ALL: &[(&str, &str, Consts)] = &[
         RASTERIZE_SHUFFLES,
         &[("CHANNELS", 3), ("PIXELS", 1), ("SKIP_MISSED", 1)],
     ),
+    ("rig", RIG, &[]),
     ("present", PRESENT, &[]),
     ("mesh", MESH, &[]),
 ];

@@ -107,6 +107,7 @@ pub struct Splatter {
     view: Option<ViewBuffers>,
     bindings: Option<Bindings>,
     num_gaussians: u32,
+    buffers_generation: u64,
     camera: Option<Camera>,
     max_pairs: u32,
 }
@@ -190,6 +191,7 @@ impl Splatter {
             view: None,
             bindings: None,
             num_gaussians: 0,
+            buffers_generation: 0,
             camera: None,
             max_pairs: (max_bytes / 4).min(u32::MAX as u64) as u32,
         }
@@ -211,27 +213,7 @@ impl Splatter {
         queue: &wgpu::Queue,
         cloud: &GaussianCloud,
     ) -> Result<(), SplatError> {
-        let channels = cloud.channels as u32;
-        let max_count = max_gaussians(&device.limits(), channels);
-        if cloud.len() as u64 > max_count {
-            return Err(SplatError::TooManyGaussians {
-                count: cloud.len() as u64,
-                channels,
-                max: max_count,
-            });
-        }
-        let n = cloud.len() as u32;
-        let fits = self
-            .cloud
-            .as_ref()
-            .is_some_and(|c| c.capacity >= n && c.channels == channels);
-        if !fits {
-            let capacity = (n as u64 + n as u64 / 4)
-                .clamp(MIN_GAUSSIANS as u64, max_count.max(MIN_GAUSSIANS as u64))
-                as u32;
-            self.cloud = Some(Self::alloc_cloud(device, capacity, channels));
-            self.bindings = None;
-        }
+        self.reserve(device, queue, cloud.len(), cloud.channels as u32)?;
         let Some(buffers) = &self.cloud else {
             return Ok(());
         };
@@ -245,25 +227,91 @@ impl Splatter {
             })
             .collect();
         queue.write_buffer(&buffers.gaussians, 0, bytemuck::cast_slice(&gpu));
-        let (c, stride) = (
-            cloud.channels,
-            feature_stride(cloud.channels as u32) as usize,
-        );
+        self.write_features(queue, &cloud.features);
+        Ok(())
+    }
+
+    /// Makes room for `count` Gaussians of `channels` channels, whose attributes something else
+    /// writes ([`Self::gaussian_buffer`]: the rig pass, or [`Self::upload`]) and whose features
+    /// go in by [`Self::write_features`]. Reallocates (with headroom) only when they outgrow the
+    /// buffers or the channel count changes; then [`Self::buffers_generation`] changes and their
+    /// contents are lost. Fails, keeping what was there, if the adapter cannot bind buffers this
+    /// big.
+    pub fn reserve(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        count: usize,
+        channels: u32,
+    ) -> Result<(), SplatError> {
+        let max_count = max_gaussians(&device.limits(), channels);
+        if count as u64 > max_count {
+            return Err(SplatError::TooManyGaussians {
+                count: count as u64,
+                channels,
+                max: max_count,
+            });
+        }
+        let n = count as u32;
+        let fits = self
+            .cloud
+            .as_ref()
+            .is_some_and(|c| c.capacity >= n && c.channels == channels);
+        if !fits {
+            let capacity = (n as u64 + n as u64 / 4)
+                .clamp(MIN_GAUSSIANS as u64, max_count.max(MIN_GAUSSIANS as u64))
+                as u32;
+            self.cloud = Some(Self::alloc_cloud(device, capacity, channels));
+            self.bindings = None;
+            self.buffers_generation += 1;
+        }
+        queue.write_buffer(&self.depth_count, 0, bytemuck::bytes_of(&n));
+        self.num_gaussians = n;
+        Ok(())
+    }
+
+    /// Writes the features of the reserved Gaussians (`channels` per Gaussian, Gaussian-major),
+    /// padded to the stride the rasterizer reads.
+    pub fn write_features(&self, queue: &wgpu::Queue, features: &[f32]) {
+        let Some(buffers) = &self.cloud else { return };
+        let c = buffers.channels as usize;
+        let stride = feature_stride(buffers.channels) as usize;
         if c == stride {
-            queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(&cloud.features));
+            queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(features));
         } else {
-            let mut padded = vec![0.0f32; cloud.len() * stride];
+            let mut padded = vec![0.0f32; features.len() / c * stride];
             for (to, from) in padded
                 .chunks_exact_mut(stride)
-                .zip(cloud.features.chunks_exact(c))
+                .zip(features.chunks_exact(c))
             {
                 to[..c].copy_from_slice(from);
             }
             queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(&padded));
         }
-        queue.write_buffer(&self.depth_count, 0, bytemuck::bytes_of(&n));
-        self.num_gaussians = n;
-        Ok(())
+    }
+
+    /// The attributes the preprocess reads (one [`GpuGaussian`] each), for passes that write them.
+    pub fn gaussian_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.cloud.as_ref().map(|c| &c.gaussians)
+    }
+
+    /// Changes whenever the Gaussian buffers are reallocated (and their contents lost).
+    pub fn buffers_generation(&self) -> u64 {
+        self.buffers_generation
+    }
+
+    /// The attributes of every Gaussian as the preprocess will read them (waits for the GPU; for
+    /// tests).
+    pub fn read_gaussians(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Vec<GpuGaussian> {
+        let Some(c) = &self.cloud else {
+            return Vec::new();
+        };
+        let size = self.num_gaussians as u64 * size_of::<GpuGaussian>() as u64;
+        if size == 0 {
+            return Vec::new();
+        }
+        let bytes = read_buffers(device, queue, &[(&c.gaussians, size)]);
+        bytemuck::cast_slice(&bytes[0]).to_vec()
     }
 
     fn alloc_cloud(device: &wgpu::Device, capacity: u32, channels: u32) -> CloudBuffers {
@@ -338,7 +386,7 @@ impl Splatter {
         if self.bindings.is_none() {
             self.bindings = Some(self.bind(device, camera));
         }
-        let (tiles_x, tiles_y) = camera.tiles();
+        let (tiles_x, tiles_y) = super::tile_grid(camera);
         let (Some(view), Some(bindings)) = (&self.view, &self.bindings) else {
             return;
         };
@@ -366,7 +414,7 @@ impl Splatter {
         channels: u32,
         pair_capacity: u32,
     ) -> ViewBuffers {
-        let (tx, ty) = camera.tiles();
+        let (tx, ty) = super::tile_grid(camera);
         let pairs = pair_capacity as u64;
         ViewBuffers {
             width: camera.width,
@@ -456,7 +504,7 @@ impl Splatter {
                 &self.stats,
             ],
         );
-        let (tx, ty) = camera.tiles();
+        let (tx, ty) = super::tile_grid(camera);
         let tile_bits = 32 - (tx * ty).saturating_sub(1).leading_zeros();
         let tile_sort = RadixSort::new(
             device,
@@ -574,7 +622,7 @@ impl Splatter {
                 dispatch_1d(&mut pass, v.pair_capacity.div_ceil(256));
             }
             Stage::Rasterize => {
-                let (tx, ty) = camera.tiles();
+                let (tx, ty) = super::tile_grid(camera);
                 pass.set_pipeline(&b.rasterize_pipeline);
                 pass.set_bind_group(0, &b.rasterize, &[]);
                 pass.dispatch_workgroups(tx, ty, 1);

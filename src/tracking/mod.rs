@@ -9,6 +9,7 @@ mod format;
 pub mod import;
 mod playback;
 mod retarget;
+mod source_view;
 
 pub use format::{
     BodyKind, EhmIdentityRecord, Frame, Identity, MAX_COEFFICIENT, MAX_ROTATION, MAX_TRANSLATION,
@@ -17,6 +18,7 @@ pub use format::{
 pub use playback::{Player, camera_at};
 pub(crate) use retarget::rig_of;
 pub use retarget::{Retarget, RetargetReport};
+pub use source_view::SourceView;
 
 /// The shipped demo motion for the default body (`tools/make_demo_motion.py`).
 pub const DEMO_MOTION_JSON: &[u8] = include_bytes!("../../assets/demo_motion.json");

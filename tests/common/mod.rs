@@ -174,7 +174,7 @@ pub fn avatar_header_end(bytes: &[u8]) -> usize {
         .0
 }
 
-/// [`guava::bench::portrait_placed`] written as a PNG `name` in `dir`.
+/// [`guava::synthetic::portrait_placed`] written as a PNG `name` in `dir`.
 pub fn portrait_placed(
     dir: &std::path::Path,
     name: &str,
@@ -182,9 +182,34 @@ pub fn portrait_placed(
     at: [i64; 2],
 ) -> std::path::PathBuf {
     let path = dir.join(name);
-    guava::bench::portrait_placed(size, at)
+    guava::synthetic::portrait_placed(size, at)
         .expect("portrait")
         .save(&path)
         .expect("save");
     path
+}
+
+/// The default reconstruction of a photo file through the pipeline, as `guava reconstruct` runs
+/// it: the avatar, the report and the view.
+pub fn reconstruct_file(
+    pipeline: &mut guava::pipeline::Pipeline,
+    body: &guava::body::BodyModel,
+    photo: &std::path::Path,
+    tracked: guava::pipeline::Tracked,
+) -> Result<
+    (
+        guava::avatar::Avatar,
+        guava::pipeline::Report,
+        guava::tracking::SourceView,
+    ),
+    guava::reconstruct::ReconstructError,
+> {
+    use guava::pipeline::{Mode, Photo};
+    let o = pipeline.reconstruct(
+        Mode::Default(body),
+        Photo::File(photo),
+        tracked,
+        &mut |_| true,
+    )?;
+    Ok((o.avatar, o.report, o.view))
 }

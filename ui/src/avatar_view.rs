@@ -1,22 +1,25 @@
-//! The avatar being shown: its Gaussians rigged onto the current body pose (sliders or motion),
-//! re-rigged only when the pose changed, as a scene for the splatting viewport.
+//! The avatar being shown (posed on the GPU by the viewport from the body's current pose), and
+//! what its panel shows of the photo it was made from.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use glam::Vec2;
-use guava::avatar::{Avatar, Rig};
+use guava::avatar::Avatar;
 use guava::body::{Landmark, Posable, PosedBody};
 use guava::fit::{BodyPoint, FitReport};
-use guava::gaussians::GaussianCloud;
 use guava::keypoints::Keypoint;
-use guava::reconstruct::{Crop, SOURCE_SIZE, SourceImage, SourceView};
+use guava::photo::{Crop, SOURCE_SIZE, SourceImage};
+use guava::render::view::AvatarRef;
+use guava::tracking::SourceView;
 
+use crate::app::next_id;
 use crate::body_panel::BodyState;
-use crate::viewport::SceneRef;
 
 pub struct AvatarState {
     pub avatar: Arc<Avatar>,
+    /// The id the viewport uploads it by (once).
+    id: u64,
     /// What it is and where it came from, shown in the panel.
     pub label: String,
     pub source: Option<SourcePreview>,
@@ -24,9 +27,6 @@ pub struct AvatarState {
     pub tracked_photo: Option<TrackedPhoto>,
     /// The source photo's camera (world→camera, `invtanfov`), when the avatar was made here.
     pub source_camera: Option<(glam::Mat4, f32)>,
-    rig: Rig,
-    rigged_for: Option<u64>,
-    scene: Option<SceneRef>,
 }
 
 impl AvatarState {
@@ -43,42 +43,21 @@ impl AvatarState {
         };
         Self {
             avatar: Arc::new(avatar),
+            id: next_id(),
             label,
             source,
             tracked_photo,
             source_camera,
-            rig: Rig::default(),
-            rigged_for: None,
-            scene: None,
         }
     }
 
-    /// The avatar on `body`'s current pose; a new scene generation (taken from `generation`)
-    /// only when the pose changed.
-    pub fn scene(&mut self, body: &mut BodyState, generation: &mut u64) -> Option<SceneRef> {
-        let model = body.model.clone();
-        let (posed, pose_generation) = body.posed();
-        if self.rigged_for != Some(pose_generation) || self.scene.is_none() {
-            let mut cloud = self
-                .scene
-                .take()
-                .and_then(|s| Arc::try_unwrap(s.cloud).ok())
-                .unwrap_or_else(|| GaussianCloud::new(self.avatar.channels));
-            if let Err(e) = self
-                .rig
-                .animate(&self.avatar, posed, model.triangles(), &mut cloud)
-            {
-                log::error!("{e}");
-                return None;
-            }
-            *generation += 1;
-            self.scene = Some(SceneRef {
-                generation: *generation,
-                cloud: Arc::new(cloud),
-            });
-            self.rigged_for = Some(pose_generation);
+    /// The avatar for the viewport, bound to a body whose mesh is `triangles`.
+    pub fn reference(&self, triangles: Arc<Vec<[u32; 3]>>) -> AvatarRef {
+        AvatarRef {
+            id: self.id,
+            avatar: self.avatar.clone(),
+            triangles,
         }
-        self.scene.clone()
     }
 }
 
@@ -130,7 +109,7 @@ impl Photo {
 /// user sees whether the tracking lines up with the photo (GUAVA samples the photo there).
 pub struct TrackedPhoto {
     photo: Photo,
-    /// Projected vertices in units of the photo's side, thinned for drawing.
+    /// Every [`TRACKED_POINT_STRIDE`]th vertex projected, in units of the photo's side.
     points: Vec<Vec2>,
 }
 
@@ -138,15 +117,23 @@ pub struct TrackedPhoto {
 const TRACKED_POINT_STRIDE: usize = 8;
 
 impl TrackedPhoto {
-    /// `None` when the photo cannot be read again.
-    pub fn new(photo: &Path, crop: Option<Crop>, projected: &[Vec2]) -> Option<Self> {
+    /// `body` posed by `view` over the photo; `None` when either cannot be done again.
+    pub fn new(photo: &Path, view: &SourceView, body: &impl Posable) -> Option<Self> {
+        let mut posed = PosedBody::default();
+        body.pose(&view.pose, &mut posed).ok()?;
+        let camera = &view.camera;
+        let side = camera.width as f32;
+        let points = posed
+            .vertices
+            .iter()
+            .step_by(TRACKED_POINT_STRIDE)
+            .map(|&v| camera.project(v))
+            .filter(|p| p.z > 0.0 && p.is_finite())
+            .map(|p| Vec2::new(p.x, p.y) / side)
+            .collect();
         Some(Self {
-            photo: Photo::load(photo, crop)?,
-            points: projected
-                .iter()
-                .step_by(TRACKED_POINT_STRIDE)
-                .copied()
-                .collect(),
+            photo: Photo::load(photo, view.crop)?,
+            points,
         })
     }
 
@@ -178,7 +165,7 @@ pub struct SourcePreview {
     detail: Vec<(Vec2, BodyPoint)>,
     /// Where the shown pose puts the keypoints' landmarks, then the detail points (pixels).
     fitted: Vec<Vec2>,
-    /// While editing: the body pose generation `fitted` was computed for.
+    /// While editing: the id of the body pose `fitted` was computed for.
     fitted_for: Option<u64>,
     pub rms_px: Option<f32>,
     editing: bool,
@@ -269,10 +256,10 @@ impl SourcePreview {
     /// `body`'s pose.
     pub fn ui(&mut self, ui: &mut egui::Ui, body: &mut BodyState) -> Option<FitAction> {
         if self.editing {
-            let (posed, generation) = body.posed();
-            if self.fitted_for != Some(generation) {
-                self.fitted = self.project_all(posed);
-                self.fitted_for = Some(generation);
+            let pose = body.posed();
+            if self.fitted_for != Some(pose.id) {
+                self.fitted = self.project_all(&pose.posed);
+                self.fitted_for = Some(pose.id);
             }
         }
         let (rect, scale) = self.photo_image.show(ui);

@@ -1,5 +1,5 @@
-//! The body being posed by hand: its model, the pose the sliders edit, and the posed mesh the
-//! viewport draws. Re-poses only when the pose changed.
+//! The body being posed by hand: its model, the pose the sliders edit, and the posed body the
+//! viewport draws (as a mesh, or under an avatar). Re-poses only when the pose changed.
 
 use std::sync::Arc;
 
@@ -7,9 +7,10 @@ use glam::Vec3;
 use guava::avatar::Avatar;
 use guava::body::{BodyPose, Posable, PosedBody, vertex_normals};
 use guava::render::mesh::MeshStyle;
+use guava::render::view::{MeshFrame, PoseRef};
 
+use crate::app::next_id;
 use crate::body_model::{SliderGroup, ViewerBody};
-use crate::viewport::BodyFrame;
 
 /// Posed positions and normals, shared with the viewport callback without copying.
 type PosedMesh = (Arc<Vec<Vec3>>, Arc<Vec<Vec3>>);
@@ -26,15 +27,17 @@ pub struct BodyState {
     triangles: Arc<Vec<[u32; 3]>>,
     weld: Vec<u32>,
     sliders: Vec<SliderGroup>,
-    posed: PosedBody,
+    /// The posed body, shared with the viewport callback without copying, and its pose's id.
+    posed: Arc<PosedBody>,
     posed_for: Option<BodyPose>,
-    pose_generation: u64,
+    pose_id: u64,
     normals_scratch: Vec<Vec3>,
-    frame: Option<PosedMesh>,
+    /// The mesh view's posed mesh, made when it is first shown after a re-pose.
+    mesh: Option<PosedMesh>,
 }
 
 impl BodyState {
-    pub fn new(model: ViewerBody, label: String, topology: u64) -> Self {
+    pub fn new(model: ViewerBody, label: String) -> Self {
         let pose = BodyPose::rest(&model);
         let selected_joint = model.joint_names().position(|n| n == "head").unwrap_or(0);
         Self {
@@ -47,12 +50,12 @@ impl BodyState {
             shaded: true,
             wireframe: false,
             selected_joint,
-            topology,
-            posed: PosedBody::default(),
+            topology: next_id(),
+            posed: Arc::default(),
             posed_for: None,
-            pose_generation: 0,
+            pose_id: 0,
             normals_scratch: Vec::new(),
-            frame: None,
+            mesh: None,
         }
     }
 
@@ -83,37 +86,46 @@ impl BodyState {
         if self.posed_for.as_ref() == Some(&self.pose) {
             return;
         }
-        if let Err(e) = self.model.pose(&self.pose, &mut self.posed) {
+        // In place unless the viewport still holds the last pose.
+        if let Err(e) = self.model.pose(&self.pose, Arc::make_mut(&mut self.posed)) {
             log::error!("posing failed: {e}");
             return;
         }
-        let mut normals = Vec::new();
-        vertex_normals(
-            &self.posed.vertices,
-            &self.triangles,
-            &self.weld,
-            &mut self.normals_scratch,
-            &mut normals,
-        );
-        self.frame = Some((Arc::new(self.posed.vertices.clone()), Arc::new(normals)));
+        self.mesh = None;
         self.posed_for = Some(self.pose.clone());
-        self.pose_generation += 1;
+        self.pose_id = next_id();
     }
 
-    /// The posed body and its pose generation (which changes with every re-pose), re-posed first
-    /// if the pose changed.
-    pub fn posed(&mut self) -> (&PosedBody, u64) {
+    /// The posed body and its pose's id (new with every re-pose), re-posed first if the pose
+    /// changed.
+    pub fn posed(&mut self) -> PoseRef {
         self.update();
-        (&self.posed, self.pose_generation)
+        PoseRef {
+            id: self.pose_id,
+            posed: self.posed.clone(),
+        }
     }
 
     /// The posed mesh for the viewport, re-posed first if a slider moved.
-    pub fn frame(&mut self, background: [f32; 3]) -> Option<BodyFrame> {
+    pub fn frame(&mut self, background: [f32; 3]) -> MeshFrame {
         self.update();
-        let (positions, normals) = self.frame.clone()?;
-        Some(BodyFrame {
+        let (positions, normals) = self
+            .mesh
+            .get_or_insert_with(|| {
+                let mut normals = Vec::new();
+                vertex_normals(
+                    &self.posed.vertices,
+                    &self.triangles,
+                    &self.weld,
+                    &mut self.normals_scratch,
+                    &mut normals,
+                );
+                (Arc::new(self.posed.vertices.clone()), Arc::new(normals))
+            })
+            .clone();
+        MeshFrame {
             topology: self.topology,
-            pose: self.pose_generation,
+            pose: self.pose_id,
             triangles: self.triangles.clone(),
             positions,
             normals,
@@ -122,7 +134,12 @@ impl BodyState {
                 wireframe: self.wireframe,
                 background,
             },
-        })
+        }
+    }
+
+    /// The body's triangles, shared with the viewport.
+    pub fn triangles(&self) -> Arc<Vec<[u32; 3]>> {
+        self.triangles.clone()
     }
 
     pub fn ui(&mut self, ui: &mut egui::Ui) {

@@ -326,7 +326,8 @@ fn motion_files_open_and_bad_ones_keep_the_current_motion() {
 
 #[test]
 fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
-    use guava::reconstruct::{SourceView, synthetic};
+    use guava::synthetic;
+    use guava::tracking::SourceView;
     let mut h = harness(Options::default());
     h.run();
     let dir = std::env::temp_dir().join(format!("guava-ui-avatar-{}", std::process::id()));
@@ -388,7 +389,7 @@ fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
 
     // A real photo with no tracking beside it is fitted first (the demo portrait, copied alone).
     let portrait = dir.join("portrait.png");
-    std::fs::copy(guava_ui::app::demo_portrait(), &portrait).expect("copy portrait");
+    std::fs::copy(guava_ui::demo_portrait(), &portrait).expect("copy portrait");
     h.state_mut().open(portrait);
     wait_until(&mut h, |app| {
         app.avatar_info()

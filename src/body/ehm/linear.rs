@@ -17,11 +17,11 @@
 use glam::{Vec2, Vec3};
 
 use super::{EhmExtras, EhmModel, EhmParams, FLAME_EYES, FLAME_JAW, SMPLX_EYES, SMPLX_JAW};
+use crate::body::coco_limb_keypoints;
 use crate::body::{
     BodyModel, BodyPose, Joint, Landmark, MAX_INFLUENCES, MorphTarget, Posable, PoseError,
     PosedBody, SMPLX_JOINTS, TargetGroup, smplx_to_default,
 };
-use crate::keypoints::coco_limb_keypoints;
 
 /// The leading PCA components the linear body carries for fitting, of SMPL-X shape, FLAME shape
 /// and FLAME expression: what 2D keypoints can tell apart (later components stay zero).

@@ -1,13 +1,13 @@
 //! Benchmarks behind `guava bench …`: each prints a table of medians and the hardware it ran on.
 
 mod body;
-mod guava;
+mod guava_mode;
 mod reconstruct;
 mod splat;
 
 pub use body::{BodyBenchArgs, body};
-pub use guava::{GuavaBenchArgs, guava};
-pub use reconstruct::{ReconstructBenchArgs, portrait_placed, reconstruct};
+pub use guava_mode::{GuavaBenchArgs, guava};
+pub use reconstruct::{ReconstructBenchArgs, reconstruct};
 pub use splat::{SplatBenchArgs, splat};
 
 fn median(mut v: Vec<f64>) -> f64 {

@@ -11,13 +11,14 @@ use glam::Mat4;
 
 use super::body::cpu_name;
 use super::median;
-use crate::avatar::Rig;
-use crate::body::{BodyPose, EhmModel, Posable, PosedBody};
-use crate::camera::Camera;
-use crate::gaussians::GaussianCloud;
-use crate::guava_mode::{GuavaModels, reconstruct_guava, uv_map};
-use crate::onnx::OnnxRuntime;
-use crate::reconstruct::{SOURCE_SIZE, SourceImage, SourceView};
+use guava::avatar::Rig;
+use guava::body::{BodyPose, EhmModel, Posable, PosedBody};
+use guava::camera::Camera;
+use guava::gaussians::GaussianCloud;
+use guava::guava_mode::{GuavaModels, reconstruct_guava, uv_map};
+use guava::onnx::OnnxRuntime;
+use guava::photo::{SOURCE_SIZE, SourceImage};
+use guava::tracking::SourceView;
 
 #[derive(clap::Args, Clone, Debug)]
 pub struct GuavaBenchArgs {
@@ -78,7 +79,7 @@ pub fn guava(args: &GuavaBenchArgs) -> anyhow::Result<()> {
         load_s * 1e3
     );
     println!("{:<34} {:>10.2}", "UV map (once per body)", uv_ms);
-    let mut per_stage: Vec<(crate::reconstruct::Stage, Vec<f64>)> = Vec::new();
+    let mut per_stage: Vec<(guava::progress::Stage, Vec<f64>)> = Vec::new();
     let mut totals = Vec::new();
     let mut avatar = None;
     for i in 0..args.iterations + 1 {

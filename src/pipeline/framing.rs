@@ -11,10 +11,11 @@ use std::path::Path;
 use glam::Vec2;
 use image::RgbaImage;
 
-use super::source::{Crop, SOURCE_SIZE, SourceImage};
-use super::{ReconstructError, Stage};
 use crate::fit::MIN_PRESENCE;
 use crate::keypoints::{Detections, Landmarkers, PoseKeypoints};
+use crate::photo::{Crop, PhotoError, SOURCE_SIZE, SourceImage};
+use crate::progress::{Stage, check};
+use crate::reconstruct::ReconstructError;
 
 /// The share of the person the centred square may leave out before the photo is reframed (a
 /// mask's stray edge pixels stay under it).
@@ -166,16 +167,28 @@ impl SourcePhoto {
     /// runs when `models` are given and the photo has no alpha (for the person mask) or the
     /// square asks for its points. A fitted one is framed around the person
     /// `models` find ([`frame`]), and every keypoint model runs on the chosen square.
-    /// `progress` hears [`Stage::Fit`] before each model run.
+    /// `progress` hears [`Stage::Keypoints`] before each model run.
     pub fn read(
         photo: &Path,
         square: Square,
         models: Option<&mut Landmarkers>,
         progress: &mut dyn FnMut(Stage) -> bool,
     ) -> Result<Self, ReconstructError> {
-        let file = photo.display().to_string();
         let (pixels, has_alpha) = SourceImage::decode(photo)?;
-        let read = |crop| SourceImage::from_rgba_at(&pixels, crop, has_alpha, &file, SOURCE_SIZE);
+        let file = photo.display().to_string();
+        Self::from_pixels(pixels, has_alpha, &file, square, models, progress)
+    }
+
+    /// [`Self::read`] of a photo already decoded (`file` names it in errors).
+    pub fn from_pixels(
+        pixels: RgbaImage,
+        has_alpha: bool,
+        file: &str,
+        square: Square,
+        models: Option<&mut Landmarkers>,
+        progress: &mut dyn FnMut(Stage) -> bool,
+    ) -> Result<Self, ReconstructError> {
+        let read = |crop| SourceImage::from_rgba_at(&pixels, crop, has_alpha, file, SOURCE_SIZE);
         let (crop, image, detections) = match (square, models) {
             (Square::Tracked { crop, points }, models) => {
                 let image = read(crop)?;
@@ -219,7 +232,7 @@ impl SourcePhoto {
     fn fit(
         pixels: &RgbaImage,
         has_alpha: bool,
-        read: &dyn Fn(Option<Crop>) -> Result<SourceImage, ReconstructError>,
+        read: &dyn Fn(Option<Crop>) -> Result<SourceImage, PhotoError>,
         framing: Framing,
         models: &mut Landmarkers,
         progress: &mut dyn FnMut(Stage) -> bool,
@@ -281,11 +294,7 @@ fn detect(
 
 /// Asks `progress` whether to go on with the keypoint models.
 fn started(progress: &mut dyn FnMut(Stage) -> bool) -> Result<(), ReconstructError> {
-    if progress(Stage::Fit) {
-        Ok(())
-    } else {
-        Err(ReconstructError::Cancelled)
-    }
+    Ok(check(Stage::Keypoints, progress)?)
 }
 
 fn keypoint_error(e: impl std::fmt::Display) -> ReconstructError {
@@ -295,7 +304,7 @@ fn keypoint_error(e: impl std::fmt::Display) -> ReconstructError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::reconstruct::source::MIN_SOURCE_SIDE;
+    use crate::photo::MIN_SOURCE_SIDE;
 
     const KEEP: Framing = Framing::KeepCentred;
 

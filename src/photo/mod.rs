@@ -1,13 +1,20 @@
-//! The source photo as reconstruction sees it: the square of the photo the tracked camera
-//! describes ([`Crop`]; the centred square unless the tracking or the fit says otherwise),
-//! resized (antialiased) to the render size, RGB in [0, 1] multiplied by the person mask (black
-//! background, as `data_loader.py` does), plus the mask itself.
+//! The photo as every stage sees it (the base layer: keypoints, fit and reconstruction all read
+//! it): the square of the photo the source camera describes ([`Crop`]; the centred square unless
+//! the tracking or the fit says otherwise), resized (antialiased) to the render size, RGB in
+//! [0, 1] multiplied by the person mask (black background, as `data_loader.py` does), plus the
+//! mask itself; and [`bilinear_clamped`], the sampling every stage shares.
 
 use std::path::Path;
 
 use image::{RgbaImage, imageops};
 
-use super::ReconstructError;
+/// A photo that cannot be read or used, naming the file.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{file}: {problem}")]
+pub struct PhotoError {
+    pub file: String,
+    pub problem: String,
+}
 
 /// GUAVA's render and UV-sampling size (`MODEL.image_size`).
 pub const SOURCE_SIZE: u32 = 512;
@@ -84,15 +91,15 @@ pub struct SourceImage {
 
 impl SourceImage {
     /// Reads a PNG or JPEG's centred square; an alpha channel, when present, is the person mask.
-    pub fn load(path: &Path) -> Result<Self, ReconstructError> {
+    pub fn load(path: &Path) -> Result<Self, PhotoError> {
         Self::load_at(path, None, SOURCE_SIZE)
     }
 
     /// Whether the photo at `path` has an alpha channel (its person mask), read from its header
     /// without decoding the pixels: a photo with one needs no pose model for a mask.
-    pub fn has_alpha(path: &Path) -> Result<bool, ReconstructError> {
+    pub fn has_alpha(path: &Path) -> Result<bool, PhotoError> {
         use image::ImageDecoder;
-        let fail = |e: &dyn std::fmt::Display| ReconstructError::Image {
+        let fail = |e: &dyn std::fmt::Display| PhotoError {
             file: path.display().to_string(),
             problem: e.to_string(),
         };
@@ -105,7 +112,7 @@ impl SourceImage {
     }
 
     /// [`Self::load`] of `crop` (`None`: the centred square) at `size`².
-    pub fn load_at(path: &Path, crop: Option<Crop>, size: u32) -> Result<Self, ReconstructError> {
+    pub fn load_at(path: &Path, crop: Option<Crop>, size: u32) -> Result<Self, PhotoError> {
         let (decoded, has_alpha) = Self::decode(path)?;
         Self::from_rgba_at(&decoded, crop, has_alpha, &path.display().to_string(), size)
     }
@@ -113,9 +120,9 @@ impl SourceImage {
     /// The photo's pixels, upright, and whether it has an alpha channel, for making it at
     /// several sizes ([`Self::from_rgba_at`]) from one decoding. Phones store a portrait
     /// sideways with an Exif orientation tag; it is applied here, as every image viewer does.
-    pub fn decode(path: &Path) -> Result<(RgbaImage, bool), ReconstructError> {
+    pub fn decode(path: &Path) -> Result<(RgbaImage, bool), PhotoError> {
         use image::ImageDecoder;
-        let fail = |e: image::ImageError| ReconstructError::Image {
+        let fail = |e: image::ImageError| PhotoError {
             file: path.display().to_string(),
             problem: e.to_string(),
         };
@@ -134,11 +141,7 @@ impl SourceImage {
 
     /// Crops the centred square, resizes it to [`SOURCE_SIZE`] and applies the alpha as mask when
     /// `use_alpha`. `file` names the image in errors.
-    pub fn from_rgba(
-        image: &RgbaImage,
-        use_alpha: bool,
-        file: &str,
-    ) -> Result<Self, ReconstructError> {
+    pub fn from_rgba(image: &RgbaImage, use_alpha: bool, file: &str) -> Result<Self, PhotoError> {
         Self::from_rgba_at(image, None, use_alpha, file, SOURCE_SIZE)
     }
 
@@ -150,9 +153,9 @@ impl SourceImage {
         use_alpha: bool,
         file: &str,
         size: u32,
-    ) -> Result<Self, ReconstructError> {
+    ) -> Result<Self, PhotoError> {
         let (w, h) = image.dimensions();
-        let fail = |problem: String| ReconstructError::Image {
+        let fail = |problem: String| PhotoError {
             file: file.into(),
             problem,
         };
@@ -186,7 +189,7 @@ impl SourceImage {
             mask.push(a);
         }
         if use_alpha && mask.iter().all(|&a| a < 0.5) {
-            return Err(ReconstructError::Image {
+            return Err(PhotoError {
                 file: file.into(),
                 problem:
                     "the alpha channel is transparent everywhere: there is no person to reconstruct"
@@ -213,4 +216,21 @@ impl SourceImage {
         let rgb = [self.rgb[3 * i], self.rgb[3 * i + 1], self.rgb[3 * i + 2]];
         (rgb, self.mask.as_ref().map_or(1.0, |m| m[i]))
     }
+}
+
+/// Bilinear interpolation on a `size`² grid at centre-at-integer `(x, y)`, clamped to the edge;
+/// `at` reads texel `row · size + column` (colours, or scalars such as a mask).
+pub fn bilinear_clamped<T>(size: usize, x: f32, y: f32, at: impl Fn(usize) -> T) -> T
+where
+    T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+{
+    let lerp = |a: T, b: T, t: f32| a * (1.0 - t) + b * t;
+    let max = (size - 1) as f32;
+    let (x, y) = (x.clamp(0.0, max), y.clamp(0.0, max));
+    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+    let (x1, y1) = ((x0 + 1).min(size - 1), (y0 + 1).min(size - 1));
+    let (fx, fy) = (x - x0 as f32, y - y0 as f32);
+    let top = lerp(at(y0 * size + x0), at(y0 * size + x1), fx);
+    let bottom = lerp(at(y1 * size + x0), at(y1 * size + x1), fx);
+    lerp(top, bottom, fy)
 }

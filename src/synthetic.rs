@@ -5,10 +5,10 @@
 use glam::Vec3;
 use image::{Rgba, RgbaImage};
 
-use super::SOURCE_SIZE;
-use super::raster::{Fragments, rasterize};
 use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, vertex_normals};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
+use crate::photo::SOURCE_SIZE;
+use crate::raster::{Fragments, rasterize};
 
 /// A smooth colour pattern over the rest surface: bands with periods of 0.6–1 m, so a 512²
 /// texture resolves it and an exact reconstruction can match it closely.
@@ -115,4 +115,14 @@ pub fn shaded(
         }
     }
     out
+}
+
+/// The demo portrait pasted at `at` on a `size` canvas of its background's grey: a photo where
+/// the centred square cuts the person, or leaves them small.
+pub fn portrait_placed(size: [u32; 2], at: [i64; 2]) -> image::ImageResult<image::RgbImage> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png");
+    let portrait = image::open(path)?.to_rgb8();
+    let mut photo = image::RgbImage::from_pixel(size[0], size[1], image::Rgb([150, 150, 160]));
+    image::imageops::replace(&mut photo, &portrait, at[0], at[1]);
+    Ok(photo)
 }

@@ -8,17 +8,18 @@ use std::time::{Duration, Instant};
 
 use super::body::cpu_name;
 use super::median;
-use crate::avatar::Rig;
-use crate::body::{BodyModel, BodyPose, EhmModel, PosedBody};
-use crate::fit::{FitInput, embed_face, fit_keypoints};
-use crate::gaussians::GaussianCloud;
-use crate::keypoints::{Landmarkers, Wholebody};
-use crate::onnx::OnnxRuntime;
-use crate::reconstruct::synthetic::{banded_texture, photo, upper_body_camera};
-use crate::reconstruct::{
-    DEFAULT_UV_SIZE, SourceImage, SourceView, Stage, UvMap, reconstruct_default,
-};
-use crate::tracking::{Retarget, demo_motion};
+use guava::avatar::Rig;
+use guava::body::{BodyModel, BodyPose, EhmModel, PosedBody};
+use guava::fit::{FitInput, embed_face, fit_keypoints};
+use guava::gaussians::GaussianCloud;
+use guava::keypoints::{Landmarkers, Wholebody};
+use guava::onnx::OnnxRuntime;
+use guava::photo::SourceImage;
+use guava::progress::Stage;
+use guava::reconstruct::{DEFAULT_UV_SIZE, UvMap, reconstruct_default};
+use guava::synthetic::{banded_texture, photo, upper_body_camera};
+use guava::tracking::SourceView;
+use guava::tracking::{Retarget, demo_motion};
 
 #[derive(clap::Args, Clone, Debug)]
 pub struct ReconstructBenchArgs {
@@ -54,7 +55,7 @@ pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
         cpu_name(),
         args.iterations
     );
-    let mut per_stage: Vec<Vec<f64>> = vec![Vec::new(); Stage::ALL.len() + 2];
+    let mut per_stage: Vec<Vec<f64>> = vec![Vec::new(); Stage::DEFAULT.len() + 2];
     let mut avatar = None;
     for i in 0..args.iterations + 2 {
         let t0 = Instant::now();
@@ -67,7 +68,7 @@ pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
             for (k, (_, d)) in report.timings.iter().enumerate() {
                 per_stage[k + 1].push(ms(*d));
             }
-            per_stage[Stage::ALL.len() + 1].push(ms(t0.elapsed()));
+            per_stage[Stage::DEFAULT.len() + 1].push(ms(t0.elapsed()));
         }
         avatar = Some(a);
     }
@@ -75,7 +76,7 @@ pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
     println!("{:<34} {:>10}", "stage", "ms");
     println!("{:<34} {:>10.2}", "UV map + mirror (once per body)", uv_ms);
     let names = std::iter::once("crop + resize + mask")
-        .chain(Stage::ALL.iter().map(|s| s.name()))
+        .chain(Stage::DEFAULT.iter().map(|s| s.name()))
         .chain(std::iter::once("total per photo"));
     for (name, times) in names.zip(per_stage) {
         println!("{:<34} {:>10.2}", name, median(times));
@@ -134,21 +135,12 @@ pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The demo portrait pasted at `at` on a `size` canvas of its background's grey: a photo where
-/// the centred square cuts the person, or leaves them small.
-pub fn portrait_placed(size: [u32; 2], at: [i64; 2]) -> anyhow::Result<image::RgbImage> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png");
-    let portrait = image::open(path)?.to_rgb8();
-    let mut photo = image::RgbImage::from_pixel(size[0], size[1], image::Rgb([150, 150, 160]));
-    image::imageops::replace(&mut photo, &portrait, at[0], at[1]);
-    Ok(photo)
-}
-
 /// Reading a photo for the fit (decoding, framing, every keypoint model on the chosen square)
 /// where the centred square will do (the demo portrait) and where it has to be reframed,
 /// side by side.
 fn framing_cost(iterations: usize) -> anyhow::Result<()> {
-    use crate::reconstruct::framing::{Framing, SourcePhoto, Square};
+    use guava::pipeline::{Framing, SourcePhoto, Square};
+    use guava::synthetic::portrait_placed;
     let dir = std::env::temp_dir().join(format!("guava-bench-framing-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
     let mut photos = vec![(

@@ -73,7 +73,7 @@ pub fn rasterize(vertices: &[Vec3], triangles: &[[u32; 3]], camera: &Camera) -> 
 /// Calls `f(x, y, barycentrics)` for every pixel of a `width × height` grid whose centre
 /// (x + ½, y + ½) lies in the 2D triangle `p` (either winding, edges included), with the centre's
 /// barycentrics. Degenerate and non-finite triangles cover nothing.
-pub(super) fn cover(p: [Vec2; 3], width: u32, height: u32, mut f: impl FnMut(u32, u32, [f32; 3])) {
+pub(crate) fn cover(p: [Vec2; 3], width: u32, height: u32, mut f: impl FnMut(u32, u32, [f32; 3])) {
     let area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
     if area == 0.0 || !area.is_finite() {
         return;

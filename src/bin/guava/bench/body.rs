@@ -7,10 +7,10 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::median;
-use crate::body::{
+use guava::body::{
     BodyModel, BodyPose, EhmModel, Posable, PosedBody, TargetGroup, triangle_frames,
 };
-use crate::gaussians::synthetic::Rng;
+use guava::gaussians::synthetic::Rng;
 
 #[derive(clap::Args, Clone, Debug)]
 pub struct BodyBenchArgs {

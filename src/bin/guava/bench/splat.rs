@@ -7,13 +7,13 @@
 //! one submission's overhead per stage, so the stage sum exceeds the whole-frame time). The frame
 //! time is always the CPU wall time of one whole submitted frame, median over `--frames`.
 
-use crate::camera::{Camera, orbit};
-use crate::gaussians::synthetic::BallCloud;
-use crate::gpu::GpuContext;
-use crate::render::readback::wait;
-use crate::render::timing::StageTimer;
-use crate::render::{HeadlessRenderer, Stage};
 use glam::Vec3;
+use guava::camera::{Camera, orbit};
+use guava::gaussians::synthetic::BallCloud;
+use guava::gpu::GpuContext;
+use guava::render::readback::wait;
+use guava::render::timing::StageTimer;
+use guava::render::{HeadlessRenderer, Stage};
 
 use super::median;
 use std::time::Instant;
@@ -75,7 +75,7 @@ pub fn splat(args: &SplatBenchArgs) -> anyhow::Result<()> {
             let cloud = BallCloud::new(count, channels as usize, 7).generate();
             if let Some(dir) = &args.write_ply {
                 std::fs::create_dir_all(dir)?;
-                crate::gaussians::ply::write(
+                guava::gaussians::ply::write(
                     &dir.join(format!("ball_{count}_c{channels}.ply")),
                     &cloud,
                 )?;

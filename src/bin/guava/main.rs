@@ -1,0 +1,386 @@
+//! `guava`: the headless CLI. `guava info` reports the GPU and ONNX Runtime; `guava render` draws a
+//! splat file or an avatar to PNG; `guava motion` reads and converts motion files; `guava
+//! synth-photo` and `guava reconstruct` make avatars; `guava bench` times stages.
+
+mod bench;
+mod photo;
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+use guava::camera::Camera;
+use guava::gpu::GpuContext;
+use guava::render::HeadlessRenderer;
+use std::path::{Path, PathBuf};
+
+#[derive(Parser)]
+#[command(
+    name = "guava",
+    version,
+    about = "GUAVA Gaussian avatars: headless tools"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print the GPU adapter, its limits, and whether ONNX Runtime loads.
+    Info,
+    /// Render a 3DGS .ply file or an avatar to a PNG, framed by an orbit camera.
+    Render {
+        /// A splat file: 3DGS PLY (standard or PlayCanvas's compressed layout) or antimatter15's .splat
+        #[arg(long, required_unless_present = "avatar", conflicts_with = "avatar")]
+        ply: Option<PathBuf>,
+        /// An avatar file (.guava), posed on the default body.
+        #[arg(long)]
+        avatar: Option<PathBuf>,
+        /// With --avatar: the EHM body (tools/convert_ehm.py) a GUAVA-mode avatar is bound to;
+        /// without it, avatars are posed on the default body.
+        #[arg(long, requires = "avatar")]
+        ehm: Option<PathBuf>,
+        /// With --avatar: pose it from this motion (tracking .json, ARKit .csv, SMPL-X .npz) at --time.
+        #[arg(long, requires = "avatar")]
+        motion: Option<PathBuf>,
+        #[arg(long, default_value_t = 0.0, requires = "motion")]
+        time: f64,
+        /// With --motion: view through the motion's tracked camera (512², as GUAVA renders).
+        #[arg(long, requires = "motion")]
+        tracked_camera: bool,
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long, default_value_t = 512)]
+        width: u32,
+        #[arg(long, default_value_t = 512)]
+        height: u32,
+        /// Vertical field of view in degrees.
+        #[arg(long, default_value_t = 50.0)]
+        fov: f32,
+        /// Orbit angles in degrees around the cloud's centre.
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        yaw: f32,
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        pitch: f32,
+    },
+    /// Read a motion (tracking .json, ARKit .csv, SMPL-X .npz), say what the default body (or an
+    /// EHM model) takes of it, and optionally write it in our tracking format.
+    Motion {
+        file: PathBuf,
+        /// Write it as a tracking .json (validated, atomically).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Report retargeting onto this EHM model (.npz) instead of the default body.
+        #[arg(long)]
+        ehm: Option<PathBuf>,
+    },
+    /// Write a synthetic photo of the default body (a smooth colour pattern on its surface, drawn
+    /// from GUAVA's camera) and its exact tracking beside it (same name, .json): a known answer
+    /// for reconstruction.
+    SynthPhoto {
+        #[arg(long)]
+        out: PathBuf,
+        /// Camera yaw around the body in degrees (positive: towards the body's left).
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        yaw: f32,
+    },
+    /// Reconstruct a photo into an avatar: the default reconstruction, or GUAVA mode with
+    /// --guava-models and --ehm; the pose and camera from its tracking file, or fitted.
+    Reconstruct {
+        /// PNG or JPEG; its alpha channel, if any, is the person mask.
+        #[arg(long)]
+        image: PathBuf,
+        /// The photo's tracking (frame 0's pose and camera); default: beside the image (.json),
+        /// and without one, a fit to the pose model's keypoints.
+        #[arg(long, conflicts_with = "fit")]
+        tracking: Option<PathBuf>,
+        /// Fit the pose and camera to the photo even if a tracking file is beside it.
+        #[arg(long)]
+        fit: bool,
+        /// The avatar file to write (.guava).
+        #[arg(long)]
+        out: PathBuf,
+        #[command(flatten)]
+        keypoints: photo::KeypointArgs,
+        /// GUAVA mode: the folder of GUAVA's networks as exported by
+        /// tools/export_guava_onnx.py (needs --ehm; without a tracking file of that body, EHM is
+        /// fitted to the keypoints).
+        #[arg(long, requires = "ehm")]
+        guava_models: Option<PathBuf>,
+        /// GUAVA mode: the EHM body (tools/convert_ehm.py).
+        #[arg(long, requires = "guava_models")]
+        ehm: Option<PathBuf>,
+    },
+    /// Fit the default body's (or, with --ehm, GUAVA's body's) pose, shape, expression and fingers
+    /// and GUAVA's camera to a photo's body, face and hand keypoints (MediaPipe's models through
+    /// ONNX Runtime) and write them as a tracking file.
+    Fit {
+        #[arg(long)]
+        image: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        /// Also write the photo (the square it was fitted in, at 512²) with the points found (green) and where the
+        /// fitted body puts them (red), twice the size, as PNG.
+        #[arg(long)]
+        overlay: Option<PathBuf>,
+        #[command(flatten)]
+        keypoints: photo::KeypointArgs,
+        /// Fit this EHM body (tools/convert_ehm.py; GUAVA mode's) instead of the default body.
+        #[arg(long)]
+        ehm: Option<PathBuf>,
+    },
+    /// Benchmarks (print a table).
+    Bench {
+        #[command(subcommand)]
+        which: Bench,
+    },
+}
+
+#[derive(Subcommand)]
+enum Bench {
+    /// The splatting pass: per-stage times over cloud sizes, resolutions and channel counts.
+    Splat(bench::SplatBenchArgs),
+    /// Posing the default body on one CPU core: skinning, transforms and triangle frames.
+    Body(bench::BodyBenchArgs),
+    /// Default reconstruction of a synthetic photo, per stage, and animating the avatar.
+    Reconstruct(bench::ReconstructBenchArgs),
+    /// GUAVA mode's reconstruction with a folder of exported models, per stage.
+    Guava(bench::GuavaBenchArgs),
+}
+
+fn main() {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    if let Err(e) = run(Cli::parse()) {
+        eprintln!("guava: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Info => info(),
+        Command::Render {
+            ply,
+            avatar,
+            ehm,
+            motion,
+            time,
+            tracked_camera,
+            out,
+            width,
+            height,
+            fov,
+            yaw,
+            pitch,
+        } => {
+            // Avatars stand on a y-up body; splat files use GUAVA's y-down axes.
+            let is_avatar = avatar.is_some();
+            let (cloud, name, tracked) = match (ply, avatar) {
+                (Some(ply), _) => {
+                    let cloud = guava::gaussians::read_file(&ply)?;
+                    (cloud, ply.display().to_string(), None)
+                }
+                (None, Some(avatar)) => {
+                    let avatar_file = guava::avatar::Avatar::load(&avatar)?;
+                    let (cloud, camera) = match ehm {
+                        Some(ehm) => {
+                            let mut body = guava::body::EhmModel::load(&ehm)?;
+                            avatar_file.apply_ehm_identity(&mut body);
+                            posed_avatar(&avatar_file, &body, motion.as_deref(), time)
+                        }
+                        None => posed_avatar(
+                            &avatar_file,
+                            &guava::body::BodyModel::default_body()?,
+                            motion.as_deref(),
+                            time,
+                        ),
+                    }
+                    .with_context(|| avatar.display().to_string())?;
+                    (
+                        cloud,
+                        avatar.display().to_string(),
+                        camera.filter(|_| tracked_camera),
+                    )
+                }
+                (None, None) => anyhow::bail!("give --ply or --avatar"),
+            };
+            if tracked_camera && tracked.is_none() {
+                anyhow::bail!("--tracked-camera: the motion has no tracked camera");
+            }
+            let camera = match tracked {
+                Some(camera) => camera,
+                None => {
+                    let view = guava::camera::orbit_view(
+                        &cloud,
+                        fov.to_radians(),
+                        yaw.to_radians(),
+                        pitch.to_radians(),
+                        is_avatar,
+                    )
+                    .with_context(|| format!("{name}: no finite Gaussian to frame"))?;
+                    Camera::from_fov_y(view, width, height, fov.to_radians())
+                }
+            };
+            let mut renderer = HeadlessRenderer::new(GpuContext::headless()?);
+            let background = vec![0.0; cloud.channels];
+            let (image, stats) = renderer.render(&cloud, &camera, &background)?;
+            guava::render::save_png(&image.to_rgb8(), &out)?;
+            println!(
+                "{name}: {} Gaussians, {} drawn, {} culled ({} tile pairs) → {} [{}]",
+                stats.input,
+                stats.visible,
+                stats.culled(),
+                stats.tile_pairs,
+                out.display(),
+                renderer.gpu.adapter_label()
+            );
+            Ok(())
+        }
+        Command::SynthPhoto { out, yaw } => photo::synth_photo(&out, yaw),
+        Command::Reconstruct {
+            image,
+            tracking,
+            fit: force_fit,
+            out,
+            keypoints,
+            guava_models,
+            ehm,
+        } => {
+            let guava = guava_models.as_deref().zip(ehm.as_deref());
+            photo::reconstruct(&image, tracking, force_fit, &out, &keypoints, guava)
+        }
+        Command::Fit {
+            image,
+            out,
+            overlay,
+            keypoints,
+            ehm,
+        } => photo::fit(&image, &out, overlay.as_deref(), &keypoints, ehm.as_deref()),
+        Command::Motion { file, out, ehm } => motion(&file, out.as_deref(), ehm.as_deref()),
+        Command::Bench { which } => match which {
+            Bench::Splat(args) => bench::splat(&args),
+            Bench::Body(args) => bench::body(&args),
+            Bench::Reconstruct(args) => bench::reconstruct(&args),
+            Bench::Guava(args) => bench::guava(&args),
+        },
+    }
+}
+
+/// An avatar posed on its body: at rest, or by `motion` at `time` (then also the motion's tracked
+/// camera at that time, if it has one).
+fn posed_avatar(
+    avatar: &guava::avatar::Avatar,
+    body: &impl guava::body::Posable,
+    motion: Option<&Path>,
+    time: f64,
+) -> Result<(guava::gaussians::GaussianCloud, Option<Camera>)> {
+    use guava::body::{BodyPose, PosedBody};
+    avatar.check_body(body).map_err(anyhow::Error::msg)?;
+    let mut pose = BodyPose::rest(body);
+    let mut camera = None;
+    if let Some(motion) = motion {
+        let t = guava::tracking::import::open_motion(motion)?.tracking;
+        guava::tracking::Retarget::new(&t, body).sample(&t, time, &mut pose);
+        camera = guava::tracking::camera_at(&t, time)
+            .map(|(w2c, invtanfov)| Camera::guava(w2c, guava::photo::SOURCE_SIZE, invtanfov));
+    }
+    avatar.apply_identity(body, &mut pose);
+    let mut posed = PosedBody::default();
+    body.pose(&pose, &mut posed)?;
+    let mut cloud = guava::gaussians::GaussianCloud::new(avatar.channels);
+    guava::avatar::Rig::default().animate(avatar, &posed, body.triangles(), &mut cloud)?;
+    Ok((cloud, camera))
+}
+
+fn motion(file: &Path, out: Option<&Path>, ehm: Option<&Path>) -> Result<()> {
+    use guava::tracking::Retarget;
+    let imported = guava::tracking::import::open_motion(file)?;
+    let t = &imported.tracking;
+    println!(
+        "{}: {:?} rig, {} frames at {} fps ({:.2} s), {} joints, {} parameters, {} identity values{}",
+        file.display(),
+        t.body,
+        t.frames.len(),
+        t.fps,
+        t.duration(),
+        t.joints.len(),
+        t.parameters.len(),
+        t.identity.parameters.len(),
+        if t.frames[0].camera.is_some() {
+            ", cameras"
+        } else {
+            ""
+        }
+    );
+    for note in &imported.notes {
+        println!("  import: {note}");
+    }
+    let (target, report) = match ehm {
+        Some(path) => {
+            let mut model = guava::body::EhmModel::load(path)?;
+            if let Some(identity) = &t.identity.ehm {
+                model.identity = identity.to_identity();
+            }
+            (path.display().to_string(), Retarget::new(t, &model).report)
+        }
+        None => (
+            "the default body".into(),
+            Retarget::new(t, &guava::body::BodyModel::default_body()?).report,
+        ),
+    };
+    println!(
+        "on {target}: drives {} joints and {} parameters",
+        report.joints_mapped, report.parameters_mapped
+    );
+    for line in report.lines() {
+        println!("  {line}");
+    }
+    if let Some(out) = out {
+        t.save(out)?;
+        println!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+fn info() -> Result<()> {
+    let gpu = GpuContext::headless()?;
+    let info = gpu.adapter.get_info();
+    let limits = gpu.device.limits();
+    println!("adapter:   {}", gpu.adapter_label());
+    println!("driver:    {} {}", info.driver, info.driver_info);
+    println!("backend:   {:?}", info.backend);
+    println!(
+        "limits:    max storage buffer {} MiB, max buffer {} MiB, max texture {}, storage buffers/stage {}, workgroup storage {} B",
+        limits.max_storage_buffer_binding_size >> 20,
+        limits.max_buffer_size >> 20,
+        limits.max_texture_dimension_2d,
+        limits.max_storage_buffers_per_shader_stage,
+        limits.max_compute_workgroup_storage_size
+    );
+    println!(
+        "timestamps: {}",
+        if gpu
+            .device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+        {
+            "yes"
+        } else {
+            "no (benchmarks use CPU timers)"
+        }
+    );
+    println!(
+        "subgroups: {}..={} lanes; rasterizer tuning: {:?}",
+        info.subgroup_min_size,
+        info.subgroup_max_size,
+        guava::render::RasterTuning::for_device(&info, gpu.device.features())
+    );
+    match guava::onnx::OnnxRuntime::load() {
+        Ok(rt) => println!(
+            "onnxruntime: {} loaded from {}",
+            rt.version,
+            rt.library.display()
+        ),
+        Err(e) => println!("onnxruntime: not available: {e}"),
+    }
+    Ok(())
+}

@@ -1,0 +1,252 @@
+//! `guava reconstruct`, `guava fit` and `guava synth-photo`: photos in, avatars, tracking files
+//! and known-answer photos out, all through the library's pipeline.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use guava::body::{BodyModel, BodyPose, EhmModel};
+use guava::guava_mode::GuavaModels;
+use guava::pipeline::{
+    FitBody, Framing, KeypointModels, Mode, Photo, Pipeline, Tracked, fit_lines, tracking_beside,
+};
+use guava::tracking::SourceView;
+
+/// Where the keypoint models come from.
+#[derive(clap::Args)]
+pub struct KeypointArgs {
+    /// Keypoint models from this folder instead of the shipped ones (same file names and
+    /// inputs and outputs as assets/models/).
+    #[arg(long)]
+    keypoint_models: Option<PathBuf>,
+    /// EHM-Tracker's checkpoint folder (yolox_l.onnx, dw-ll_ucoco_384.onnx): its DWPose places
+    /// the body and hand points; the face, irises and person mask stay MediaPipe's.
+    #[arg(long)]
+    dwpose: Option<PathBuf>,
+}
+
+impl KeypointArgs {
+    fn pipeline(&self) -> Pipeline {
+        Pipeline::new(KeypointModels::new(
+            self.keypoint_models.clone(),
+            self.dwpose.clone(),
+        ))
+    }
+}
+
+/// Prints each stage as it starts; never cancels.
+fn print_stage(stage: guava::progress::Stage) -> bool {
+    eprintln!("  {}…", stage.name());
+    true
+}
+
+/// Reconstructs `image` into an avatar at `out`: the default reconstruction, or GUAVA mode with
+/// `guava` = (networks folder, EHM body). `tracking` names the tracking file; without one, the
+/// one beside the photo, else a fit (always a fit with `force_fit`).
+pub fn reconstruct(
+    image: &Path,
+    tracking: Option<PathBuf>,
+    force_fit: bool,
+    out: &Path,
+    keypoints: &KeypointArgs,
+    guava: Option<(&Path, &Path)>,
+) -> Result<()> {
+    let tracked = match tracking {
+        _ if force_fit => Tracked::Fit,
+        Some(path) => Tracked::File(path),
+        None => Tracked::beside(image),
+    };
+    let mut pipeline = keypoints.pipeline();
+    let outcome = match guava {
+        Some((models, ehm)) => {
+            let t0 = std::time::Instant::now();
+            let mut networks = GuavaModels::load_dir(guava::onnx::OnnxRuntime::load()?, models)?;
+            let body = EhmModel::load(ehm)?;
+            eprintln!(
+                "  GUAVA models ({}) and body {:?} loaded in {:.1} s",
+                networks.source,
+                body.name,
+                t0.elapsed().as_secs_f64()
+            );
+            let mode = Mode::Guava {
+                body: &body,
+                networks: &mut networks,
+            };
+            pipeline.reconstruct(mode, Photo::File(image), tracked, &mut print_stage)?
+        }
+        None => {
+            let body = BodyModel::default_body()?;
+            let mode = Mode::Default(&body);
+            pipeline.reconstruct(mode, Photo::File(image), tracked, &mut print_stage)?
+        }
+    };
+    let avatar = &outcome.avatar;
+    avatar.save(out)?;
+    println!(
+        "{}: {} ({} template + {} UV Gaussians, {} channels) → {}",
+        image.display(),
+        avatar.kind.label(),
+        avatar.template.len(),
+        avatar.uv.local.len(),
+        avatar.channels,
+        out.display()
+    );
+    for line in outcome.report.lines() {
+        println!("  {line}");
+    }
+    Ok(())
+}
+
+/// Fits the default body (or an EHM body) to a photo's keypoints and writes the result as a
+/// tracking file; `overlay` also writes the photo with the points.
+pub fn fit(
+    image: &Path,
+    out: &Path,
+    overlay: Option<&Path>,
+    keypoints: &KeypointArgs,
+    ehm: Option<&Path>,
+) -> Result<()> {
+    let mut pipeline = keypoints.pipeline();
+    let (ehm_body, template);
+    // Framed as the reconstruction of that body frames it (GUAVA mode: EHM-Tracker's crop).
+    let (body, framing) = match ehm {
+        Some(path) => {
+            ehm_body = EhmModel::load(path)?;
+            (FitBody::Ehm(&ehm_body), Framing::AroundPerson)
+        }
+        None => {
+            template = BodyModel::default_body()?;
+            (FitBody::Template(&template), Framing::KeepCentred)
+        }
+    };
+    let source = pipeline.source(body, Photo::File(image), Tracked::Fit, framing, &mut |_| {
+        true
+    })?;
+    let report = &source.report;
+    let fit = report.fit.as_ref().context("the fit did not run")?;
+    let name = image.file_name().unwrap_or_default().to_string_lossy();
+    let face = if fit.face.is_some() {
+        " and face_landmark face mesh"
+    } else {
+        ""
+    };
+    let points = report.body_points.unwrap_or("no");
+    let fitted =
+        |body: &str| format!("fitted by guava fit to {name}: {points} keypoints{face}, {body}");
+    let tracking = match body {
+        FitBody::Ehm(b) => source.view.to_tracking(b, &fitted(&b.name)),
+        FitBody::Template(b) => source.view.to_tracking(b, &fitted("default body")),
+    };
+    tracking.save(out)?;
+    let framed = match source.view.crop {
+        Some(c) => format!(", framed {}² at ({}, {})", c.side, c.left, c.top),
+        None => String::new(),
+    };
+    let presence = source
+        .photo
+        .detections
+        .as_ref()
+        .map_or(f32::NAN, |d| d.pose.presence);
+    println!(
+        "{}: person presence {presence:.2}{framed} → {}",
+        image.display(),
+        out.display()
+    );
+    for line in fit_lines(fit) {
+        println!("  {line}");
+    }
+    for (stage, d) in &report.timings {
+        println!("  {:32} {:8.1} ms", stage.name(), d.as_secs_f64() * 1e3);
+    }
+    if let Some(path) = overlay {
+        write_fit_overlay(&source.photo.image, fit, path)?;
+        println!("  overlay → {}", path.display());
+    }
+    Ok(())
+}
+
+/// The photo at twice its size with each point found (green) and where the fitted body puts it
+/// (red): body keypoints as rings, face-mesh, hand and iris points as dots.
+fn write_fit_overlay(
+    source: &guava::photo::SourceImage,
+    report: &guava::fit::FitReport,
+    path: &Path,
+) -> Result<()> {
+    const SCALE: f32 = 2.0;
+    let side = source.size * SCALE as u32;
+    let mut canvas = image::RgbImage::from_fn(side, side, |x, y| {
+        let i = (y / SCALE as u32 * source.size + x / SCALE as u32) as usize;
+        let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0) as u8;
+        image::Rgb([0, 1, 2].map(|c| q(source.rgb[3 * i + c])))
+    });
+    let mut dot = |p: glam::Vec2, radius: f32, colour: [u8; 3], ring: bool| {
+        let c = p * SCALE;
+        let r = radius.ceil() as i32 + 1;
+        for dy in -r..=r {
+            for dx in -r..=r {
+                let d = ((dx * dx + dy * dy) as f32).sqrt();
+                let hit = if ring {
+                    (d - radius).abs() < 0.8
+                } else {
+                    d <= radius
+                };
+                let (x, y) = (c.x as i32 + dx, c.y as i32 + dy);
+                if hit && x >= 0 && y >= 0 && (x as u32) < side && (y as u32) < side {
+                    canvas.put_pixel(x as u32, y as u32, image::Rgb(colour));
+                }
+            }
+        }
+    };
+    let (green, red) = ([60, 230, 60], [240, 40, 40]);
+    for (&seen, &fitted) in report.observed.iter().zip(&report.fitted) {
+        dot(seen, 4.0, green, true);
+        dot(fitted, 2.5, red, false);
+    }
+    let face = report
+        .face
+        .iter()
+        .flat_map(|f| f.observed.iter().zip(&f.fitted));
+    let hands = report
+        .hands
+        .iter()
+        .flat_map(|h| h.observed.iter().zip(&h.fitted));
+    let irises = report
+        .gaze
+        .iter()
+        .flat_map(|g| g.observed.iter().zip(&g.fitted));
+    for (&seen, &fitted) in face.chain(hands).chain(irises) {
+        dot(seen, 1.5, green, false);
+        dot(fitted, 1.0, red, false);
+    }
+    guava::render::save_png(&canvas, path)
+}
+
+/// Writes a synthetic photo of the default body and its exact tracking beside it.
+pub fn synth_photo(out: &Path, yaw: f32) -> Result<()> {
+    use guava::synthetic;
+    let body = BodyModel::default_body()?;
+    let view = SourceView {
+        pose: BodyPose::rest(&body),
+        camera: synthetic::upper_body_camera(&body, yaw.to_radians()),
+        crop: None,
+    };
+    let image = synthetic::photo(&body, &view.pose, &view.camera, synthetic::banded_texture)?;
+    guava::atomic_file::write_atomic(out, |w| {
+        image
+            .write_to(w, image::ImageFormat::Png)
+            .map_err(std::io::Error::other)
+    })
+    .with_context(|| format!("writing {}", out.display()))?;
+    let tracking_path = tracking_beside(out);
+    let name = out.file_name().unwrap_or_default().to_string_lossy();
+    view.to_tracking(
+        &body,
+        &format!("synthetic photo {name} (guava synth-photo)"),
+    )
+    .save(&tracking_path)?;
+    println!(
+        "wrote {} (synthetic: the default body with a colour pattern, yaw {yaw}°) and its tracking {}",
+        out.display(),
+        tracking_path.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,433 @@
+//! One view's frame path on a device it shares with a UI (the viewer's viewport, drawn by an egui
+//! paint callback). The long-lived passes (splatting, rig, present, mesh) live here once; what to
+//! draw arrives each frame as a [`Frame`], owned and cheap to clone, so a UI builds one per view
+//! and hands it over. [`ViewRenderer::prepare`] records work only for what changed since the last
+//! render — a cloud or an avatar goes up once, a new pose runs the rig pass, a new camera or
+//! background re-splats — and reads the splatting counters back without waiting (a frame later);
+//! [`ViewRenderer::paint`] only composites.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use glam::Vec3;
+
+use super::mesh::{MeshPass, MeshStyle};
+use super::present::{PresentMode, PresentPass, PresentUniform};
+use super::{GpuAvatar, RasterTuning, RenderStats, SplatPipelines, Splatter};
+use crate::avatar::Avatar;
+use crate::body::PosedBody;
+use crate::camera::Camera;
+use crate::gaussians::GaussianCloud;
+
+/// What one view draws this frame.
+#[derive(Clone)]
+pub struct Frame {
+    pub content: Content,
+    pub camera: Camera,
+    /// Splat at this fraction of the camera's resolution (1 = full): a UI lowers it while the
+    /// user drags or plays, to keep up, and goes back to 1 when input settles.
+    pub scale: f32,
+}
+
+#[derive(Clone)]
+pub enum Content {
+    /// A Gaussian cloud as it is (a splat file, a test scene).
+    Cloud { cloud: CloudRef, look: Look },
+    /// An avatar posed on its body, posed on the GPU.
+    Avatar {
+        avatar: AvatarRef,
+        pose: PoseRef,
+        look: Look,
+    },
+    /// A posed body as a mesh.
+    Mesh(MeshFrame),
+}
+
+/// A cloud and the id it goes by: each id is uploaded once.
+#[derive(Clone)]
+pub struct CloudRef {
+    pub id: u64,
+    pub cloud: Arc<GaussianCloud>,
+}
+
+/// An avatar with its body's triangles, and the id it goes by: each id is uploaded once.
+#[derive(Clone)]
+pub struct AvatarRef {
+    pub id: u64,
+    pub avatar: Arc<Avatar>,
+    pub triangles: Arc<Vec<[u32; 3]>>,
+}
+
+/// A posed body and the id of that pose: each id is rigged once.
+#[derive(Clone)]
+pub struct PoseRef {
+    pub id: u64,
+    pub posed: Arc<PosedBody>,
+}
+
+/// A posed body for the mesh view. `topology` changes with the body model, `pose` with every
+/// re-pose, so each is uploaded once.
+#[derive(Clone)]
+pub struct MeshFrame {
+    pub topology: u64,
+    pub pose: u64,
+    pub triangles: Arc<Vec<[u32; 3]>>,
+    pub positions: Arc<Vec<Vec3>>,
+    pub normals: Arc<Vec<Vec3>>,
+    pub style: MeshStyle,
+}
+
+/// How splats are shown: the background (one value per channel) and the present mode.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Look {
+    pub background: Vec<f32>,
+    pub display: Display,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Display {
+    pub mode: PresentMode,
+    pub rgb_channels: [u32; 3],
+    pub inv_depth_range: [f32; 2],
+}
+
+impl Default for Display {
+    fn default() -> Self {
+        Self {
+            mode: PresentMode::Rgb,
+            rgb_channels: [0, 1, 2],
+            inv_depth_range: [0.0, 1.0],
+        }
+    }
+}
+
+/// What the view tells its UI.
+#[derive(Clone, Debug, Default)]
+pub struct ViewReport {
+    /// The last splatting counters that came back.
+    pub stats: Option<RenderStats>,
+    /// Frames the splatting pass ran (it is skipped when nothing changed).
+    pub renders: u64,
+    /// Rig passes run (one per new pose of an avatar).
+    pub rigs: u64,
+    /// The size the last splat was rendered at.
+    pub rendered_size: [u32; 2],
+    /// Set when another frame is needed (the counters are on their way back, or buffers grew):
+    /// the UI requests a repaint and clears it.
+    pub needs_redraw: bool,
+    /// Content the GPU could not take (too large for the adapter, or posed on another body);
+    /// the UI shows it once and clears it.
+    pub error: Option<String>,
+}
+
+/// Which splat input the splatter holds.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Source {
+    Cloud(u64),
+    Avatar(u64),
+}
+
+#[derive(PartialEq)]
+struct SplatKey {
+    source: Source,
+    pose: Option<u64>,
+    camera: Camera,
+    background: Vec<f32>,
+}
+
+#[derive(PartialEq)]
+struct MeshKey {
+    pose: u64,
+    camera: Camera,
+    style: MeshStyle,
+}
+
+/// The stats buffer's way back: copied into staging with a render, mapped a frame later.
+enum StatsReadback {
+    Idle,
+    Copied,
+    Mapping(Arc<AtomicBool>),
+}
+
+pub struct ViewRenderer {
+    pipelines: Arc<SplatPipelines>,
+    splatter: Splatter,
+    /// The splatter's current input; an avatar is kept on the GPU while it is shown.
+    source: Option<Source>,
+    avatar: Option<(u64, GpuAvatar)>,
+    rigged: Option<(u64, u64)>,
+    last: Option<SplatKey>,
+    present: PresentPass,
+    present_uniform: wgpu::Buffer,
+    present_bind: Option<wgpu::BindGroup>,
+    stats_staging: wgpu::Buffer,
+    stats_state: StatsReadback,
+    mesh: MeshPass,
+    mesh_topology: Option<u64>,
+    mesh_uploaded: Option<u64>,
+    mesh_last: Option<MeshKey>,
+}
+
+impl ViewRenderer {
+    /// The passes for a device (its rasterizer tuned to `adapter`), drawing into `target`.
+    pub fn new(
+        device: &wgpu::Device,
+        adapter: &wgpu::AdapterInfo,
+        target: wgpu::TextureFormat,
+    ) -> Self {
+        let pipelines = Arc::new(SplatPipelines::new(
+            device,
+            RasterTuning::for_device(adapter, device.features()),
+        ));
+        Self {
+            splatter: Splatter::new(device, pipelines.clone()),
+            pipelines,
+            source: None,
+            avatar: None,
+            rigged: None,
+            last: None,
+            present: PresentPass::new(device, target),
+            present_uniform: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("View::present_uniform"),
+                size: size_of::<PresentUniform>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            present_bind: None,
+            stats_staging: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("View::stats_staging"),
+                size: 32,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            }),
+            stats_state: StatsReadback::Idle,
+            mesh: MeshPass::new(device, Some(target)),
+            mesh_topology: None,
+            mesh_uploaded: None,
+            mesh_last: None,
+        }
+    }
+
+    /// Records what `frame` needs beyond the last render, if anything.
+    pub fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        frame: &Frame,
+        report: &mut ViewReport,
+    ) -> Option<wgpu::CommandBuffer> {
+        match &frame.content {
+            Content::Mesh(mesh) => self.prepare_mesh(device, queue, mesh, &frame.camera, report),
+            Content::Cloud { cloud, look } => {
+                let source = Source::Cloud(cloud.id);
+                if self.source != Some(source) {
+                    self.source = Some(source);
+                    self.last = None;
+                    if let Some((_, avatar)) = &mut self.avatar {
+                        avatar.detach();
+                    }
+                    if let Err(e) = self.splatter.upload(device, queue, &cloud.cloud) {
+                        report.error = Some(e.to_string());
+                    }
+                }
+                self.prepare_splats(device, queue, None, false, frame, look, report)
+            }
+            Content::Avatar { avatar, pose, look } => {
+                let source = Source::Avatar(avatar.id);
+                if self.source != Some(source) {
+                    self.source = Some(source);
+                    self.last = None;
+                    self.rigged = None;
+                    if self.avatar.as_ref().is_none_or(|(id, _)| *id != avatar.id) {
+                        let gpu = GpuAvatar::new(
+                            device,
+                            self.pipelines.clone(),
+                            &avatar.avatar,
+                            &avatar.triangles,
+                        );
+                        self.avatar = Some((avatar.id, gpu));
+                    }
+                }
+                let (_, gpu) = self.avatar.as_mut().expect("made above");
+                if let Err(e) = gpu.attach(device, queue, &mut self.splatter) {
+                    report.error = Some(e.to_string());
+                    return None;
+                }
+                let mut new_pose = false;
+                if self.rigged != Some((avatar.id, pose.id)) {
+                    // Marked either way: a pose the avatar cannot take is reported once.
+                    self.rigged = Some((avatar.id, pose.id));
+                    match gpu.set_pose(queue, &pose.posed) {
+                        Ok(()) => new_pose = true,
+                        Err(e) => report.error = Some(e.to_string()),
+                    }
+                }
+                let pose = Some(pose.id);
+                self.prepare_splats(device, queue, pose, new_pose, frame, look, report)
+            }
+        }
+    }
+
+    /// Re-splats when the input, pose, camera or background changed (running the rig pass first
+    /// for a `new_pose`); updates the present uniform either way.
+    #[allow(clippy::too_many_arguments)]
+    fn prepare_splats(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        pose: Option<u64>,
+        new_pose: bool,
+        frame: &Frame,
+        look: &Look,
+        report: &mut ViewReport,
+    ) -> Option<wgpu::CommandBuffer> {
+        if let Some(stats) = self.poll_stats(device) {
+            if self.splatter.grow_for(device, &stats) {
+                self.last = None;
+                report.needs_redraw = true;
+            }
+            report.stats = Some(stats);
+        }
+        let camera = frame.camera.scaled(frame.scale);
+        let key = SplatKey {
+            source: self.source?,
+            pose,
+            camera,
+            background: look.background.clone(),
+        };
+        let mut buffer = None;
+        if self.last.as_ref() != Some(&key) && self.splatter.channels().is_some() {
+            self.splatter
+                .prepare(device, queue, &camera, &look.background);
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("View::splat"),
+            });
+            if new_pose && let Some((_, avatar)) = &self.avatar {
+                avatar.encode(&mut encoder);
+                report.rigs += 1;
+            }
+            self.splatter.encode(&mut encoder, None);
+            if matches!(self.stats_state, StatsReadback::Idle) {
+                encoder.copy_buffer_to_buffer(
+                    self.splatter.stats_buffer(),
+                    0,
+                    &self.stats_staging,
+                    0,
+                    32,
+                );
+                self.stats_state = StatsReadback::Copied;
+            }
+            buffer = Some(encoder.finish());
+            self.present_bind = self
+                .present
+                .bind(device, &self.present_uniform, &self.splatter);
+            self.last = Some(key);
+            report.renders += 1;
+            report.rendered_size = [camera.width, camera.height];
+        } else if !matches!(self.stats_state, StatsReadback::Idle) {
+            report.needs_redraw = true;
+        }
+        let d = &look.display;
+        let uniform = self.present.uniform(
+            [camera.width, camera.height],
+            d.mode,
+            d.rgb_channels,
+            d.inv_depth_range,
+        );
+        queue.write_buffer(&self.present_uniform, 0, bytemuck::bytes_of(&uniform));
+        buffer
+    }
+
+    /// Re-draws the mesh view when the pose, camera or style changed.
+    fn prepare_mesh(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        body: &MeshFrame,
+        camera: &Camera,
+        report: &mut ViewReport,
+    ) -> Option<wgpu::CommandBuffer> {
+        if self.mesh_topology != Some(body.topology) {
+            self.mesh
+                .set_topology(device, body.positions.len(), &body.triangles);
+            self.mesh_topology = Some(body.topology);
+            // A new body: its first pose id may equal the old body's last one.
+            self.mesh_uploaded = None;
+            self.mesh_last = None;
+        }
+        if self.mesh_uploaded != Some(body.pose) {
+            self.mesh
+                .set_vertices(queue, &body.positions, &body.normals);
+            self.mesh_uploaded = Some(body.pose);
+        }
+        let key = MeshKey {
+            pose: body.pose,
+            camera: *camera,
+            style: body.style,
+        };
+        if self.mesh_last.as_ref() == Some(&key) {
+            return None;
+        }
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("View::mesh"),
+        });
+        self.mesh
+            .encode(device, queue, &mut encoder, camera, &body.style);
+        self.mesh_last = Some(key);
+        report.renders += 1;
+        report.rendered_size = [camera.width, camera.height];
+        Some(encoder.finish())
+    }
+
+    /// Advances the non-blocking stats readback; returns stats when a copy has landed.
+    fn poll_stats(&mut self, device: &wgpu::Device) -> Option<RenderStats> {
+        match &self.stats_state {
+            StatsReadback::Idle => None,
+            StatsReadback::Copied => {
+                // The copy was submitted last frame: now the buffer may be mapped.
+                let done = Arc::new(AtomicBool::new(false));
+                let flag = done.clone();
+                self.stats_staging
+                    .slice(..)
+                    .map_async(wgpu::MapMode::Read, move |r| {
+                        flag.store(r.is_ok(), Ordering::Release)
+                    });
+                self.stats_state = StatsReadback::Mapping(done);
+                None
+            }
+            StatsReadback::Mapping(done) => {
+                let _ = device.poll(wgpu::PollType::Poll);
+                if !done.load(Ordering::Acquire) {
+                    return None;
+                }
+                let words: Vec<u32> = self
+                    .stats_staging
+                    .slice(..)
+                    .get_mapped_range()
+                    .map(|v| bytemuck::cast_slice(&v).to_vec())
+                    .unwrap_or_default();
+                self.stats_staging.unmap();
+                self.stats_state = StatsReadback::Idle;
+                (words.len() == 8)
+                    .then(|| RenderStats::from_words(self.splatter.num_gaussians(), &words))
+            }
+        }
+    }
+
+    /// Composites what [`Self::prepare`] last rendered for `frame`'s content.
+    pub fn paint(&self, pass: &mut wgpu::RenderPass<'static>, frame: &Frame) {
+        match &frame.content {
+            Content::Cloud { .. } | Content::Avatar { .. } => {
+                if let Some(bind) = &self.present_bind {
+                    self.present.draw(pass, bind);
+                }
+            }
+            Content::Mesh(_) => self.mesh.draw_blit(pass),
+        }
+    }
+
+    /// GPU memory the splatting pass holds (for the HUD).
+    pub fn memory(&self) -> super::splatter::MemoryUse {
+        self.splatter.memory()
+    }
+}

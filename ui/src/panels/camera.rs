@@ -1,0 +1,93 @@
+//! The camera panel: orbit, the source photo's camera or the motion's tracked camera, the orbit's
+//! angles, distance and field of view, and framing what is shown.
+
+use guava::camera::Camera;
+
+use crate::app::{CameraMode, GuavaApp, View};
+use crate::orbit::OrbitCamera;
+
+impl GuavaApp {
+    pub(crate) fn camera_ui(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Camera");
+        let source = self.avatar.as_ref().and_then(|a| a.source_camera).is_some()
+            && self.view == View::Avatar;
+        let tracked =
+            self.motion.as_ref().and_then(|m| m.camera()).is_some() && self.view != View::Gaussians;
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut self.camera_mode, CameraMode::Orbit, "orbit");
+            ui.add_enabled_ui(source, |ui| {
+                ui.selectable_value(&mut self.camera_mode, CameraMode::Source, "source photo")
+                    .on_hover_text("the camera of the photo the avatar was reconstructed from");
+            });
+            ui.add_enabled_ui(tracked, |ui| {
+                ui.selectable_value(&mut self.camera_mode, CameraMode::Tracked, "tracked")
+                    .on_hover_text("the motion's tracked camera, following the timeline");
+            });
+        });
+        let o = &mut self.orbit;
+        let mut yaw = o.yaw_rad.to_degrees();
+        let mut pitch = o.pitch_rad.to_degrees();
+        let mut fov = o.fov_y_rad.to_degrees();
+        let mut moved = ui
+            .add(egui::Slider::new(&mut yaw, -180.0..=180.0).text("yaw °"))
+            .changed();
+        moved |= ui
+            .add(egui::Slider::new(&mut pitch, -88.0..=88.0).text("pitch °"))
+            .changed();
+        moved |= ui
+            .add(egui::Slider::new(&mut fov, 5.0..=120.0).text("fov y °"))
+            .changed();
+        moved |= ui
+            .add(
+                egui::Slider::new(&mut o.distance, 0.01..=100.0)
+                    .logarithmic(true)
+                    .text("distance"),
+            )
+            .changed();
+        o.yaw_rad = yaw.to_radians();
+        o.pitch_rad = pitch.to_radians();
+        o.fov_y_rad = fov.to_radians();
+        if ui.button("Reset camera").clicked() {
+            moved = true;
+            self.reset_camera();
+        }
+        if moved {
+            self.camera_mode = CameraMode::Orbit;
+        }
+    }
+
+    /// Frames what the view shows with the orbit camera.
+    pub(crate) fn reset_camera(&mut self) {
+        let fov = self.orbit.fov_y_rad;
+        match self.view {
+            View::Gaussians => {
+                if let Some(scene) = &self.scene {
+                    self.orbit = OrbitCamera::framing(&scene.cloud, fov);
+                }
+            }
+            View::Body | View::Avatar => {
+                if let Some(body) = &mut self.body {
+                    let (lo, hi) = body.bounds();
+                    self.orbit = OrbitCamera {
+                        y_up: true,
+                        ..OrbitCamera::framing_box(lo, hi, fov)
+                    };
+                }
+            }
+        }
+    }
+
+    /// The camera the viewport looks through at `width × height` pixels: a fixed camera (the
+    /// photo's or the tracked one) when chosen and available, else the orbit.
+    pub(crate) fn view_camera(&self, width: u32, height: u32) -> Camera {
+        let fixed = match self.camera_mode {
+            CameraMode::Orbit => None,
+            CameraMode::Source => self.avatar.as_ref().and_then(|a| a.source_camera),
+            CameraMode::Tracked => self.motion.as_ref().and_then(|m| m.camera()),
+        };
+        match fixed {
+            Some((w2c, invtanfov)) => Camera::guava_in_viewport(w2c, invtanfov, width, height),
+            None => self.orbit.camera(width, height),
+        }
+    }
+}

@@ -1,0 +1,110 @@
+//! The display panel (which channels, alpha or depth; the background; the resolution while
+//! interacting) and the frame panel: the adapter, the UI's frame time and the splatting pass's
+//! counters.
+
+use guava::render::present::PresentMode;
+
+use crate::app::{GuavaApp, View};
+
+/// Resolution scales offered while the user drags, orbits or plays.
+const INTERACTIVE_SCALES: [(f32, &str); 4] =
+    [(1.0, "full"), (0.5, "½"), (1.0 / 3.0, "⅓"), (0.25, "¼")];
+
+impl GuavaApp {
+    /// The channel count of what the splatting view shows.
+    fn shown_channels(&self) -> u32 {
+        match (self.view, &self.scene, &self.avatar) {
+            (View::Avatar, _, Some(a)) => a.avatar.channels as u32,
+            (View::Gaussians, Some(s), _) => s.cloud.channels as u32,
+            _ => 3,
+        }
+    }
+
+    pub(crate) fn display_ui(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Display");
+        let channels = self.shown_channels();
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut self.display.mode, PresentMode::Rgb, "Features");
+            ui.selectable_value(&mut self.display.mode, PresentMode::Alpha, "Alpha");
+            ui.selectable_value(&mut self.display.mode, PresentMode::InverseDepth, "1/depth");
+        });
+        if self.display.mode == PresentMode::Rgb && channels > 3 {
+            ui.horizontal(|ui| {
+                let label = ui.label("channels as RGB");
+                for c in &mut self.display.rgb_channels {
+                    ui.add(egui::DragValue::new(c).range(0..=channels - 1))
+                        .labelled_by(label.id);
+                }
+            });
+        }
+        if self.display.mode == PresentMode::InverseDepth {
+            let r = &mut self.display.inv_depth_range;
+            ui.add(
+                egui::Slider::new(&mut r[1], 0.01..=10.0)
+                    .logarithmic(true)
+                    .text("1/depth max"),
+            );
+        }
+        ui.horizontal(|ui| {
+            ui.label("background");
+            ui.color_edit_button_rgb(&mut self.background);
+        });
+        let scale = &mut self.interaction.scale;
+        let current = INTERACTIVE_SCALES
+            .iter()
+            .find(|(s, _)| s == scale)
+            .map_or("?", |(_, name)| name);
+        egui::ComboBox::new("interactive_scale", "resolution while interacting")
+            .selected_text(current)
+            .show_ui(ui, |ui| {
+                for (s, name) in INTERACTIVE_SCALES {
+                    ui.selectable_value(scale, s, name);
+                }
+            })
+            .response
+            .on_hover_text(
+                "while you drag, orbit or play, the splatting pass draws at this fraction of the \
+                 viewport's resolution, and at full resolution once input settles",
+            );
+    }
+
+    pub(crate) fn frame_info_ui(&self, ui: &mut egui::Ui) {
+        ui.heading("Frame");
+        let report = self.report();
+        egui::Grid::new("hud")
+            .num_columns(2)
+            .min_col_width(120.0)
+            .show(ui, |ui| {
+                let mut row = |k: &str, v: String| {
+                    ui.label(k);
+                    ui.monospace(v);
+                    ui.end_row();
+                };
+                row("adapter", self.gpu.adapter.clone());
+                row("UI frame", format!("{:.1} ms", self.clock.frame_ms));
+                row("splat renders", report.renders.to_string());
+                row("rig passes", report.rigs.to_string());
+                let [w, h] = report.rendered_size;
+                row(
+                    "rendered at",
+                    format!(
+                        "{w}×{h}{}",
+                        if self.interaction.active {
+                            " (interacting)"
+                        } else {
+                            ""
+                        }
+                    ),
+                );
+                if let Some(s) = report.stats {
+                    row("drawn", s.visible.to_string());
+                    row("culled: near", s.near.to_string());
+                    row("culled: off-screen", s.outside.to_string());
+                    row("culled: transparent", s.transparent.to_string());
+                    row("dropped: NaN/Inf", s.nonfinite.to_string());
+                    row("degenerate", s.degenerate.to_string());
+                    row("tile pairs", s.tile_pairs.to_string());
+                }
+            });
+    }
+}

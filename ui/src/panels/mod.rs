@@ -1,0 +1,179 @@
+//! The window's panels, one file each: the menu and status bar here, the side panel's sections
+//! (avatar, mode, camera, display and frame) and the viewport in their own files.
+
+mod avatar;
+mod camera;
+mod display;
+mod mode;
+mod viewport;
+
+use crate::app::{GuavaApp, View};
+use crate::files::demo_portrait;
+
+impl GuavaApp {
+    pub(crate) fn menu_ui(&mut self, ui: &mut egui::Ui) {
+        egui::MenuBar::new().ui(ui, |ui| {
+            ui.menu_button("File", |ui| {
+                if ui.button("Open…").clicked() {
+                    if let Some(path) = rfd::FileDialog::new()
+                        .add_filter(
+                            "Splats (PLY, .splat), body template, avatar, photo or motion",
+                            &[
+                                "ply", "splat", "glb", "guava", "png", "jpg", "jpeg", "json",
+                                "csv", "npz",
+                            ],
+                        )
+                        .pick_file()
+                    {
+                        self.open(path);
+                    }
+                    ui.close();
+                }
+                if ui.button("Open GUAVA networks folder…").clicked() {
+                    if let Some(dir) = rfd::FileDialog::new().pick_folder() {
+                        self.open(dir);
+                    }
+                    ui.close();
+                }
+                if ui.button("Open test scene").clicked() {
+                    self.open_test_scene();
+                    ui.close();
+                }
+                if ui.button("Reconstruct demo portrait").clicked() {
+                    self.open(demo_portrait());
+                    ui.close();
+                }
+                if ui.button("Reconstruct synthetic photo").clicked() {
+                    self.reconstruct_synthetic_photo();
+                    ui.close();
+                }
+                if ui
+                    .add_enabled(self.scene.is_some(), egui::Button::new("Save PLY as…"))
+                    .clicked()
+                {
+                    self.save_ply_dialog();
+                    ui.close();
+                }
+                if ui
+                    .add_enabled(self.avatar.is_some(), egui::Button::new("Save avatar as…"))
+                    .clicked()
+                {
+                    self.save_avatar_dialog();
+                    ui.close();
+                }
+                ui.separator();
+                if ui.button("Quit").clicked() {
+                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            });
+            ui.menu_button("View", |ui| {
+                self.view_choice_ui(ui);
+                ui.separator();
+                if ui.button("Reset camera").clicked() {
+                    self.reset_camera();
+                    ui.close();
+                }
+            });
+        });
+    }
+
+    /// The running job with its stage and Cancel, else the last message.
+    pub(crate) fn status_ui(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            if let Some(job) = &self.job {
+                ui.spinner();
+                ui.label(format!(
+                    "{} — {} ({:.1} s)",
+                    job.path.display(),
+                    job.stage(),
+                    job.started.elapsed().as_secs_f32()
+                ));
+                if ui.button("Cancel").clicked() {
+                    job.cancel();
+                    self.job = None;
+                    self.info("loading cancelled".into());
+                }
+                ui.ctx().request_repaint();
+            } else if let Some((text, is_error)) = &self.status {
+                let color = if *is_error {
+                    ui.visuals().error_fg_color
+                } else {
+                    ui.visuals().text_color()
+                };
+                ui.colored_label(color, text);
+            }
+        });
+    }
+
+    pub(crate) fn view_choice_ui(&mut self, ui: &mut egui::Ui) {
+        let mut view = self.view;
+        ui.selectable_value(&mut view, View::Body, "Body mesh");
+        ui.selectable_value(&mut view, View::Gaussians, "Gaussians");
+        if self.avatar.is_some() {
+            ui.selectable_value(&mut view, View::Avatar, "Avatar");
+        }
+        self.set_view(view);
+    }
+
+    /// The side panel: the view, then what is shown (avatar, mode, body, motion, scene), then
+    /// how (camera, display) and the frame's counters.
+    pub(crate) fn side_panel_ui(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            ui.label("View");
+            self.view_choice_ui(ui);
+        });
+        ui.separator();
+        if self.view == View::Avatar {
+            self.avatar_ui(ui);
+        }
+        if matches!(self.view, View::Body | View::Avatar) {
+            self.mode_ui(ui);
+            ui.separator();
+            ui.heading("Body");
+            match &mut self.body {
+                Some(body) => body.ui(ui),
+                None => {
+                    ui.label("no body model loaded");
+                }
+            }
+            ui.separator();
+            self.motion_ui(ui);
+            ui.separator();
+        }
+        ui.heading("Scene");
+        match &self.scene {
+            Some(s) => {
+                ui.label(format!("{} — {}", s.name, s.kind));
+                ui.label(format!(
+                    "{} Gaussians · {} channels",
+                    s.cloud.len(),
+                    s.cloud.channels
+                ));
+            }
+            None => {
+                ui.label("nothing loaded");
+            }
+        }
+        ui.separator();
+        self.camera_ui(ui);
+        ui.separator();
+        self.display_ui(ui);
+        ui.separator();
+        self.frame_info_ui(ui);
+    }
+
+    fn motion_ui(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Motion");
+        match &self.motion {
+            Some(motion) => {
+                motion.info_ui(ui);
+                if ui.button("Unload motion").clicked() {
+                    self.motion = None;
+                }
+            }
+            None => {
+                ui.label("none: open a tracking .json, ARKit .csv or SMPL-X .npz");
+            }
+        }
+    }
+}

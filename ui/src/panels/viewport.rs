@@ -1,0 +1,131 @@
+//! The viewport: what the view shows, through which camera, at which resolution, handed to the
+//! library's view renderer by a paint callback; or, with nothing to show, what to open.
+
+use std::time::Duration;
+
+use guava::render::view::{CloudRef, Content, Frame, Look};
+
+use crate::app::{CameraMode, GuavaApp, View};
+use crate::files::demo_portrait;
+use crate::viewport::ViewportCallback;
+
+/// How soon after the last interactive frame a full-resolution one is drawn (scrolling and
+/// playback send no event when they stop).
+const SETTLE: Duration = Duration::from_millis(150);
+
+impl GuavaApp {
+    pub(crate) fn viewport_ui(&mut self, ui: &mut egui::Ui) {
+        let rect = ui.available_rect_before_wrap();
+        let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+        let showing = match self.view {
+            View::Gaussians => self.scene.is_some(),
+            View::Body => self.body.is_some(),
+            View::Avatar => self.avatar.is_some() && self.body.is_some(),
+        };
+        if !showing {
+            self.empty_state_ui(ui, rect);
+            return;
+        }
+        if !self.gpu.ready {
+            ui.painter().text(
+                rect.center(),
+                egui::Align2::CENTER_CENTER,
+                "No wgpu device: the viewer needs a Vulkan, Metal or DX12 adapter.",
+                egui::FontId::proportional(16.0),
+                ui.visuals().error_fg_color,
+            );
+            return;
+        }
+        let mut moved = false;
+        if response.double_clicked() {
+            self.camera_mode = CameraMode::Orbit;
+            self.reset_camera();
+        } else if self.orbit.handle(&response, ui) {
+            // Dragging or zooming takes the view back to the orbit camera.
+            self.camera_mode = CameraMode::Orbit;
+            moved = true;
+        }
+        let ppp = ui.ctx().pixels_per_point();
+        let (w, h) = (
+            (rect.width() * ppp).round() as u32,
+            (rect.height() * ppp).round() as u32,
+        );
+        if w == 0 || h == 0 {
+            return;
+        }
+        let look = |channels: usize| {
+            let mut background = vec![0.0; channels];
+            for (c, v) in background.iter_mut().zip(self.background) {
+                *c = v;
+            }
+            Look {
+                background,
+                display: self.display.clone(),
+            }
+        };
+        let content = match (self.view, &self.scene, &mut self.body, &self.avatar) {
+            (View::Gaussians, Some(scene), ..) => Content::Cloud {
+                cloud: CloudRef {
+                    id: scene.id,
+                    cloud: scene.cloud.clone(),
+                },
+                look: look(scene.cloud.channels),
+            },
+            (View::Avatar, _, Some(body), Some(avatar)) => Content::Avatar {
+                avatar: avatar.reference(body.triangles()),
+                pose: body.posed(),
+                look: look(avatar.avatar.channels),
+            },
+            (View::Body, _, Some(body), _) => Content::Mesh(body.frame(self.background)),
+            _ => return,
+        };
+        let playing = self.motion.as_ref().is_some_and(|m| m.is_playing());
+        let pressed = ui.ctx().input(|i| i.pointer.any_down());
+        let interacting = moved || pressed || playing;
+        self.interaction.active = interacting && self.interaction.scale < 1.0;
+        if self.interaction.active {
+            ui.ctx().request_repaint_after(SETTLE);
+        }
+        let frame = Frame {
+            content,
+            camera: self.view_camera(w, h),
+            scale: if self.interaction.active {
+                self.interaction.scale
+            } else {
+                1.0
+            },
+        };
+        let callback = ViewportCallback {
+            frame,
+            report: self.report.clone(),
+        };
+        ui.painter()
+            .add(egui_wgpu::Callback::new_paint_callback(rect, callback));
+    }
+
+    fn empty_state_ui(&mut self, ui: &mut egui::Ui, rect: egui::Rect) {
+        let mut child = ui.new_child(
+            egui::UiBuilder::new()
+                .max_rect(rect)
+                .layout(egui::Layout::top_down(egui::Align::Center)),
+        );
+        child.add_space(rect.height() * 0.35);
+        child.heading("Nothing loaded");
+        child.label("Drop a 3DGS .ply file here, or use File > Open…");
+        child.label("(Body templates, .glb, open in the Body mesh view.)");
+        child.label(
+            "(A photo .png/.jpg reconstructs an avatar: with its tracking .json beside it, or \
+             fitted.)",
+        );
+        child.add_space(8.0);
+        if child.button("Open test scene").clicked() {
+            self.open_test_scene();
+        }
+        if child.button("Reconstruct demo portrait").clicked() {
+            self.open(demo_portrait());
+        }
+        if child.button("Reconstruct synthetic photo").clicked() {
+            self.reconstruct_synthetic_photo();
+        }
+    }
+}
