@@ -1,17 +1,21 @@
-//! The rig pass: one thread per Gaussian poses an avatar's Gaussians straight into the splatting
-//! pass's input (GUAVA `ubody_gaussian.py:Ubody_Gaussian.forward`, notes/guava-pipeline.md §5;
-//! the CPU twin is src/avatar/animate.rs, which this matches to 1e-5).
-//! - Template Gaussian i sits on posed vertex i and turns with q(T_i) ⊗ r, T_i its blended
-//!   skinning matrix taken as given (roma's `rotmat_to_unitquat`), renormalised.
-//! - UV Gaussian on triangle f: μ = σ_f·R_f·Δμ + Σ b_k v_k, r = q(R_f) ⊗ r, s = σ_f·s, with R_f and
-//!   σ_f the triangle's frame (`compute_face_orientation`, src/body/frames.rs).
+//! The rig pass: an avatar's Gaussians posed straight into the splatting pass's input (GUAVA
+//! `ubody_gaussian.py:Ubody_Gaussian.forward`, notes/guava-pipeline.md §5; the CPU twin is
+//! src/avatar/animate.rs, which this matches to 1e-5). Three entry points, one thread each per
+//! item, so no thread branches on what kind of Gaussian it has:
+//! - `frames`, per triangle: its frame R (columns: first-edge direction, normal, in-plane axis)
+//!   and scale σ (`compute_face_orientation`, src/body/frames.rs), once for all its Gaussians;
+//! - `template`, per vertex: template Gaussian i sits on posed vertex i and turns with
+//!   q(T_i) ⊗ r, T_i its blended skinning matrix taken as given (roma's `rotmat_to_unitquat`),
+//!   renormalised;
+//! - `uv`, per UV Gaussian on triangle f: μ = σ_f·R_f·Δμ + Σ b_k v_k, r = q(R_f) ⊗ r, s = σ_f·s.
 //! Only the posed vertices and their skinning rotations change per frame; everything else was
 //! uploaded once with the avatar.
 
 struct RigParams {
     template_count: u32,
     uv_count: u32,
-    _pad: vec2<u32>,
+    triangle_count: u32,
+    _pad: u32,
 }
 
 // Activated attributes in the frame they are bound to (a vertex's skinning, a triangle's frame).
@@ -37,12 +41,21 @@ struct PosedVertex {
     skin: mat3x3<f32>,
 }
 
+// A posed triangle: its corners (σ in v0.w) and its frame as a unit quaternion.
+struct TriangleFrame {
+    v0: vec4<f32>,
+    v1: vec4<f32>,
+    v2: vec4<f32>,
+    rot: vec4<f32>,
+}
+
 @group(0) @binding(0) var<uniform> params: RigParams;
 @group(0) @binding(1) var<storage, read> template_gaussians: array<TemplateGaussian>;
 @group(0) @binding(2) var<storage, read> uv_gaussians: array<UvGaussian>;
 @group(0) @binding(3) var<storage, read> triangles: array<u32>;
 @group(0) @binding(4) var<storage, read> posed: array<PosedVertex>;
-@group(0) @binding(5) var<storage, read_write> gaussians: array<Gaussian>;
+@group(0) @binding(5) var<storage, read_write> frames: array<TriangleFrame>;
+@group(0) @binding(6) var<storage, read_write> gaussians: array<Gaussian>;
 
 // Hamilton product p ⊗ q of (w, x, y, z) quaternions.
 fn quat_mul(p: vec4<f32>, q: vec4<f32>) -> vec4<f32> {
@@ -52,40 +65,31 @@ fn quat_mul(p: vec4<f32>, q: vec4<f32>) -> vec4<f32> {
 
 fn quat_normalize(q: vec4<f32>) -> vec4<f32> {
     let n = sqrt(dot(q, q));
-    if n > 0.0 && is_finite(n) {
-        return q / n;
-    }
-    return vec4<f32>(1.0, 0.0, 0.0, 0.0);
+    return select(vec4<f32>(1.0, 0.0, 0.0, 0.0), q / n, n > 0.0 && is_finite(n));
 }
 
-// Shepperd's method on the matrix as given: the largest of the diagonal and the trace picks the
-// formula (ties go to the later diagonal entry, as the CPU's `max_by` does).
+// v rotated by the unit quaternion q.
+fn quat_rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    let t = 2.0 * cross(q.yzw, v);
+    return v + q.x * t + cross(q.yzw, t);
+}
+
+// Shepperd's method on the matrix as given: the largest of the trace and the diagonal picks the
+// formula (ties go to the later diagonal entry, as the CPU's `max_by` does). Every candidate is
+// computed and one selected, so no lane branches (a CPU adapter would run every branch anyway).
 fn quat_from_matrix(m: mat3x3<f32>) -> vec4<f32> {
     // r(i, j) = m[j][i]: row i, column j.
     let d = vec3<f32>(m[0][0], m[1][1], m[2][2]);
-    let trace = d.x + d.y + d.z;
-    var i = 0u;
-    if d.y >= d[i] {
-        i = 1u;
-    }
-    if d.z >= d[i] {
-        i = 2u;
-    }
-    if trace >= d[i] {
-        return quat_normalize(vec4<f32>(
-            1.0 + trace,
-            m[1][2] - m[2][1],
-            m[2][0] - m[0][2],
-            m[0][1] - m[1][0],
-        ));
-    }
-    let j = (i + 1u) % 3u;
-    let k = (i + 2u) % 3u;
-    var xyz = vec3<f32>(0.0);
-    xyz[i] = 1.0 - trace + 2.0 * m[i][i];
-    xyz[j] = m[i][j] + m[j][i];
-    xyz[k] = m[i][k] + m[k][i];
-    return quat_normalize(vec4<f32>(m[j][k] - m[k][j], xyz));
+    let t = d.x + d.y + d.z;
+    let from_trace = vec4<f32>(1.0 + t, m[1][2] - m[2][1], m[2][0] - m[0][2], m[0][1] - m[1][0]);
+    let from_x = vec4<f32>(m[1][2] - m[2][1], 1.0 - t + 2.0 * d.x, m[0][1] + m[1][0], m[0][2] + m[2][0]);
+    let from_y = vec4<f32>(m[2][0] - m[0][2], m[1][0] + m[0][1], 1.0 - t + 2.0 * d.y, m[1][2] + m[2][1]);
+    let from_z = vec4<f32>(m[0][1] - m[1][0], m[2][0] + m[0][2], m[2][1] + m[1][2], 1.0 - t + 2.0 * d.z);
+    let y_wins = d.y >= d.x;
+    let largest = select(d.x, d.y, y_wins);
+    let z_wins = d.z >= largest;
+    let diagonal = select(select(from_x, from_y, y_wins), from_z, z_wins);
+    return quat_normalize(select(diagonal, from_trace, t >= max(largest, d.z)));
 }
 
 // The reference's guarded length: sqrt(max(x·x, 1e-20)), so zero vectors normalise to zero.
@@ -94,42 +98,69 @@ fn safe_length(x: vec3<f32>) -> f32 {
 }
 
 @compute @workgroup_size(256)
-fn main(
+fn frames_main(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    let i = flat_id(wid, nwg, lid, 256u);
+    // No branch: llvmpipe turns a load or store inside one into a loop over the lanes. Threads
+    // past the end work on the last item and store the same values it does.
+    let id = flat_id(wid, nwg, lid, 256u);
+    let f = min(id, params.triangle_count - 1u);
+    let v0 = posed[triangles[3u * f]].position.xyz;
+    let v1 = posed[triangles[3u * f + 1u]].position.xyz;
+    let v2 = posed[triangles[3u * f + 2u]].position.xyz;
+    let e0 = v1 - v0;
+    let a0 = e0 / safe_length(e0);
+    let n = cross(a0, v2 - v0);
+    let a1 = n / safe_length(n);
+    let m = cross(a1, a0);
+    let a2 = -m / safe_length(m);
+    let sigma = (safe_length(e0) + abs(dot(a2, v2 - v0))) / 2.0;
+    var out: TriangleFrame;
+    out.v0 = vec4<f32>(v0, sigma);
+    out.v1 = vec4<f32>(v1, 0.0);
+    out.v2 = vec4<f32>(v2, 0.0);
+    out.rot = quat_from_matrix(mat3x3<f32>(a0, a1, a2));
+    frames[f] = out;
+}
+
+@compute @workgroup_size(256)
+fn template_main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let id = flat_id(wid, nwg, lid, 256u);
+    let i = min(id, params.template_count - 1u);
+    let t = template_gaussians[i];
+    let v = posed[i];
     var g: Gaussian;
-    if i < params.template_count {
-        let t = template_gaussians[i];
-        let v = posed[i];
-        g.pos = v.position.xyz;
-        g.rot = quat_normalize(quat_mul(quat_from_matrix(v.skin), t.rot));
-        g.scale = t.scale;
-        g.opacity = t.opacity;
-    } else if i < params.template_count + params.uv_count {
-        let u = uv_gaussians[i - params.template_count];
-        let f = 3u * u.triangle;
-        let v0 = posed[triangles[f]].position.xyz;
-        let v1 = posed[triangles[f + 1u]].position.xyz;
-        let v2 = posed[triangles[f + 2u]].position.xyz;
-        let e0 = v1 - v0;
-        let a0 = e0 / safe_length(e0);
-        let n = cross(a0, v2 - v0);
-        let a1 = n / safe_length(n);
-        let m = cross(a1, a0);
-        let a2 = -m / safe_length(m);
-        let sigma = (safe_length(e0) + abs(dot(a2, v2 - v0))) / 2.0;
-        let frame = mat3x3<f32>(a0, a1, a2);
-        let anchor = u.bary.x * v0 + u.bary.y * v1 + u.bary.z * v2;
-        g.pos = sigma * (frame * u.offset) + anchor;
-        g.rot = quat_mul(quat_from_matrix(frame), u.rot);
-        g.scale = u.scale * sigma;
-        g.opacity = u.opacity;
-    } else {
-        return;
-    }
+    g.pos = v.position.xyz;
+    g.rot = quat_normalize(quat_mul(quat_from_matrix(v.skin), t.rot));
+    g.scale = t.scale;
+    g.opacity = t.opacity;
     g._pad = 0.0;
     gaussians[i] = g;
+}
+
+@compute @workgroup_size(256)
+fn uv_main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let id = flat_id(wid, nwg, lid, 256u);
+    let j = min(id, params.uv_count - 1u);
+    let u = uv_gaussians[j];
+    let f = frames[u.triangle];
+    let sigma = f.v0.w;
+    let anchor = u.bary.x * f.v0.xyz + u.bary.y * f.v1.xyz + u.bary.z * f.v2.xyz;
+    var g: Gaussian;
+    g.pos = sigma * quat_rotate(f.rot, u.offset) + anchor;
+    g.rot = quat_mul(f.rot, u.rot);
+    g.scale = u.scale * sigma;
+    g.opacity = u.opacity;
+    g._pad = 0.0;
+    gaussians[params.template_count + j] = g;
 }

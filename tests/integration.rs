@@ -17,7 +17,6 @@ mod mesh_view;
 mod onnx_runtime;
 mod ply;
 mod reconstruct;
-mod shaders;
 mod splat_stability;
 mod splat_vs_reference;
 mod tracking;

@@ -7,7 +7,6 @@ use guava::body::{BodyModel, BodyPose, PosedBody, vertex_normals};
 use guava::camera::Camera;
 use guava::gpu::GpuContext;
 use guava::render::mesh::{MeshPass, MeshStyle, clip_from_view};
-use guava::render::readback::read_texture_bytes;
 
 const SIZE: u32 = 256;
 const BACKGROUND: [f32; 3] = [0.0, 0.0, 0.0];
@@ -63,11 +62,10 @@ impl View {
             &style,
         );
         self.gpu.queue.submit([encoder.finish()]);
-        let bytes = read_texture_bytes(
-            &self.gpu.device,
-            &self.gpu.queue,
-            self.pass.color_texture().expect("image"),
-        );
+        let bytes = self
+            .pass
+            .read_color(&self.gpu.device, &self.gpu.queue)
+            .expect("image");
         assert_eq!(bytes.len(), (SIZE * SIZE * 4) as usize);
         (
             bytes.chunks_exact(4).map(|p| p[..3] != [0, 0, 0]).collect(),

@@ -12,6 +12,7 @@
 
 mod animate;
 pub mod file;
+mod preview;
 
 pub use animate::{BodyMismatch, Rig, quat_from_matrix, quat_mul};
 pub use file::{AVATAR_FORMAT, AvatarFileError};

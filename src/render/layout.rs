@@ -53,13 +53,14 @@ pub struct SortPass {
 }
 const _: () = assert!(size_of::<SortPass>() == 16);
 
-/// shaders/rig.wgsl: the counts of the two Gaussian sets.
+/// shaders/rig.wgsl: the counts of the two Gaussian sets and of the mesh's triangles.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct RigParams {
     pub template_count: u32,
     pub uv_count: u32,
-    pub _pad: [u32; 2],
+    pub triangle_count: u32,
+    pub _pad: u32,
 }
 const _: () = assert!(size_of::<RigParams>() == 16);
 
@@ -96,3 +97,7 @@ pub struct PosedVertex {
     pub skin: [[f32; 4]; 3],
 }
 const _: () = assert!(size_of::<PosedVertex>() == 64);
+
+/// shaders/rig.wgsl's `TriangleFrame`: written by the rig's frames pass, read by its UV pass;
+/// never touched by the CPU.
+pub const TRIANGLE_FRAME_SIZE: u64 = 64;

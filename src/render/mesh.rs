@@ -1,6 +1,6 @@
 //! Host side of shaders/mesh.wgsl: draws a posed body as a shaded mesh, optionally with its
 //! wireframe, into an offscreen image (colour + depth), and blits that image into the viewer's
-//! pass. Headless callers read the image back instead ([`MeshPass::color_texture`]).
+//! pass. Headless callers read the image back instead ([`MeshPass::read_color`]).
 //!
 //! Topology is uploaded once per body; vertices (positions + normals) whenever the pose changes.
 
@@ -434,8 +434,10 @@ impl MeshPass {
         }
     }
 
-    pub fn color_texture(&self) -> Option<&wgpu::Texture> {
-        self.targets.as_ref().map(|t| &t.color)
+    /// The last image drawn, as RGBA8 rows (waits for the GPU; for tests and exports).
+    pub fn read_color(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Option<Vec<u8>> {
+        let color = &self.targets.as_ref()?.color;
+        Some(super::readback::read_texture_bytes(device, queue, color))
     }
 
     /// Draws the last encoded image into the viewer's pass (needs a `target` at construction).

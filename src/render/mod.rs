@@ -1,23 +1,26 @@
 //! Gaussian splatting: the wgpu pass ([`splatter`]), the f64 CPU reference it is tested against
 //! ([`reference`](mod@reference)), and the present pass that shows the output in a window ([`present`]).
 
-pub mod layout;
+mod layout;
 pub mod mesh;
-pub mod pipelines;
+mod pipelines;
 pub mod present;
-pub mod readback;
+mod readback;
 pub mod reference;
 mod rig;
 mod scan;
-pub mod shader;
+mod shader;
 mod sort;
 pub mod splatter;
-pub mod timing;
+mod timing;
 pub mod view;
 
+pub use layout::GpuGaussian;
 pub use pipelines::{RasterTuning, SplatPipelines};
+pub use readback::wait;
 pub use rig::GpuAvatar;
 pub use splatter::{Splatter, Stage};
+pub use timing::StageTimer;
 
 use crate::camera::Camera;
 use crate::gaussians::GaussianCloud;

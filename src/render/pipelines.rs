@@ -156,7 +156,9 @@ pub struct SplatPipelines {
     pub(crate) tile_ranges: wgpu::ComputePipeline,
     pub(crate) rasterize_layout: wgpu::BindGroupLayout,
     pub(crate) rig_layout: wgpu::BindGroupLayout,
-    pub(crate) rig: wgpu::ComputePipeline,
+    pub(crate) rig_frames: wgpu::ComputePipeline,
+    pub(crate) rig_template: wgpu::ComputePipeline,
+    pub(crate) rig_uv: wgpu::ComputePipeline,
     pub tuning: RasterTuning,
     rasterize: Mutex<HashMap<u32, wgpu::ComputePipeline>>,
 }
@@ -298,10 +300,14 @@ impl SplatPipelines {
                 Storage { read_only: true },
                 Storage { read_only: true },
                 rw(),
+                rw(),
             ],
         );
         let m = shader::module(device, "rig.wgsl", shader::RIG, &[]);
-        let rig = compute_pipeline(device, "Rig", &rig_layout, &m, "main");
+        let rig_frames = compute_pipeline(device, "Rig::frames", &rig_layout, &m, "frames_main");
+        let rig_template =
+            compute_pipeline(device, "Rig::template", &rig_layout, &m, "template_main");
+        let rig_uv = compute_pipeline(device, "Rig::uv", &rig_layout, &m, "uv_main");
         Self {
             preprocess_layout,
             preprocess,
@@ -320,7 +326,9 @@ impl SplatPipelines {
             tile_ranges,
             rasterize_layout,
             rig_layout,
-            rig,
+            rig_frames,
+            rig_template,
+            rig_uv,
             tuning,
             rasterize: Mutex::new(HashMap::new()),
         }

@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use super::layout::{PosedVertex, RigParams, TemplateGaussian, UvGaussian};
+use super::layout::{PosedVertex, RigParams, TRIANGLE_FRAME_SIZE, TemplateGaussian, UvGaussian};
 use super::pipelines::{SplatPipelines, dispatch_1d};
 use super::scan::entry;
 use super::{SplatError, Splatter};
@@ -19,6 +19,7 @@ pub struct GpuAvatar {
     pipes: Arc<SplatPipelines>,
     template_count: u32,
     uv_count: u32,
+    triangle_count: u32,
     channels: u32,
     body: (String, usize, usize),
     /// Template then UV features, Gaussian-major: written into the splatter once per
@@ -29,6 +30,8 @@ pub struct GpuAvatar {
     uv: wgpu::Buffer,
     triangles: wgpu::Buffer,
     posed: wgpu::Buffer,
+    /// Each posed triangle's corners and frame, between the rig's frames and UV passes.
+    frames: wgpu::Buffer,
     /// The splatter buffers generation the bind group and the features were made for.
     bound: Option<(u64, wgpu::BindGroup)>,
     scratch: Vec<PosedVertex>,
@@ -87,7 +90,8 @@ impl GpuAvatar {
         let params = RigParams {
             template_count: template.len() as u32,
             uv_count: uv.len() as u32,
-            _pad: [0; 2],
+            triangle_count: triangles.len() as u32,
+            _pad: 0,
         };
         let storage = wgpu::BufferUsages::STORAGE;
         let flat: Vec<u32> = triangles.iter().flatten().copied().collect();
@@ -96,6 +100,7 @@ impl GpuAvatar {
         Self {
             template_count: params.template_count,
             uv_count: params.uv_count,
+            triangle_count: params.triangle_count,
             channels: avatar.channels as u32,
             body: (
                 avatar.body.clone(),
@@ -126,6 +131,12 @@ impl GpuAvatar {
                 label: Some("Rig::posed"),
                 size: (avatar.body_vertices.max(1) * size_of::<PosedVertex>()) as u64,
                 usage: storage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            frames: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("Rig::frames"),
+                size: triangles.len().max(1) as u64 * TRIANGLE_FRAME_SIZE,
+                usage: storage,
                 mapped_at_creation: false,
             }),
             pipes,
@@ -169,7 +180,8 @@ impl GpuAvatar {
                 entry(2, &self.uv),
                 entry(3, &self.triangles),
                 entry(4, &self.posed),
-                entry(5, output),
+                entry(5, &self.frames),
+                entry(6, output),
             ],
         });
         self.bound = Some((generation, bind));
@@ -216,8 +228,15 @@ impl GpuAvatar {
             label: Some("rig"),
             timestamp_writes: None,
         });
-        pass.set_pipeline(&self.pipes.rig);
         pass.set_bind_group(0, bind, &[]);
-        dispatch_1d(&mut pass, (self.len() as u32).div_ceil(256));
+        // Frames first: the UV pass reads them.
+        for (pipeline, count) in [
+            (&self.pipes.rig_frames, self.triangle_count),
+            (&self.pipes.rig_template, self.template_count),
+            (&self.pipes.rig_uv, self.uv_count),
+        ] {
+            pass.set_pipeline(pipeline);
+            dispatch_1d(&mut pass, count.div_ceil(256));
+        }
     }
 }

@@ -22,11 +22,13 @@ pub const PRESENT: &str = include_str!("../../shaders/present.wgsl");
 pub const MESH: &str = include_str!("../../shaders/mesh.wgsl");
 
 /// `const NAME: u32 = value` lines prepended to a pass.
-pub type Consts = &'static [(&'static str, u32)];
+#[cfg(test)]
+type Consts = &'static [(&'static str, u32)];
 
 /// Every pass with the constants it needs to compile (CHANNELS = 3, PIXELS = 1 and
 /// SKIP_MISSED = 0 stand in for any).
-pub const ALL: &[(&str, &str, Consts)] = &[
+#[cfg(test)]
+const ALL: &[(&str, &str, Consts)] = &[
     ("preprocess", PREPROCESS, &[]),
     ("scan", SCAN, &[]),
     ("radix_sort", RADIX_SORT, &[]),
@@ -68,4 +70,173 @@ pub fn module(
         label: Some(label),
         source: wgpu::ShaderSource::Wgsl(compose(pass, consts).into()),
     })
+}
+
+/// Every WGSL pass parses and validates with naga (so a broken shader fails even if no test runs
+/// it), and the WGSL struct layouts equal their Rust mirrors.
+#[cfg(test)]
+mod tests {
+    use crate::render::layout::{
+        FrameUniform, GpuGaussian, PROJECTED_SIZE, PosedVertex, RigParams, ScanParams, SortPass,
+        TRIANGLE_FRAME_SIZE, TemplateGaussian, UvGaussian,
+    };
+    use crate::render::present::PresentUniform;
+    use crate::render::shader;
+    use wgpu::naga;
+
+    fn module(name: &str) -> naga::Module {
+        let (_, src, consts) = shader::ALL.iter().find(|(n, _, _)| *n == name).expect(name);
+        validated(name, src, consts)
+    }
+
+    /// A pass with its constants, parsed and validated (panics naming `label` otherwise).
+    fn validated(label: &str, src: &str, consts: &[(&str, u32)]) -> naga::Module {
+        let module = naga::front::wgsl::parse_str(&shader::compose(src, consts))
+            .unwrap_or_else(|e| panic!("{label}: {e}"));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::all(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{label}: {e:?}"));
+        module
+    }
+
+    #[test]
+    fn every_pass_validates() {
+        for (name, _, _) in shader::ALL {
+            module(name);
+        }
+        // The rasterizer at the channel counts, layouts and tunings we use and the bounds we support.
+        for c in [1, 3, 32, 64] {
+            for p in [1, 2, 4, 8] {
+                for skip in [0, 1] {
+                    let consts = [("CHANNELS", c), ("PIXELS", p), ("SKIP_MISSED", skip)];
+                    validated(
+                        &format!("rasterize {consts:?}"),
+                        shader::RASTERIZE_LOADS,
+                        &consts,
+                    );
+                }
+            }
+            for p in [1, 4] {
+                let consts = [("CHANNELS", c), ("PIXELS", p), ("SKIP_MISSED", 1)];
+                let label = format!("rasterize with shuffles {consts:?}");
+                validated(&label, shader::RASTERIZE_SHUFFLES, &consts);
+            }
+        }
+    }
+
+    /// (size, member offsets) of a struct in a WGSL module.
+    fn layout(module: &naga::Module, name: &str) -> (u32, Vec<u32>) {
+        let ty = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("struct {name} not found"))
+            .1;
+        match &ty.inner {
+            naga::TypeInner::Struct { members, span } => {
+                (*span, members.iter().map(|m| m.offset).collect())
+            }
+            other => panic!("{name} is not a struct: {other:?}"),
+        }
+    }
+
+    macro_rules! offsets {
+        ($t:ty, $($f:ident),+) => { vec![$(std::mem::offset_of!($t, $f) as u32),+] };
+    }
+
+    #[test]
+    fn wgsl_layouts_match_rust() {
+        let pre = module("preprocess");
+        assert_eq!(
+            layout(&pre, "Frame"),
+            (
+                size_of::<FrameUniform>() as u32,
+                offsets!(
+                    FrameUniform,
+                    view_from_world,
+                    focal,
+                    principal,
+                    ewa_lim,
+                    size,
+                    tiles,
+                    near,
+                    num_gaussians,
+                    pair_capacity,
+                    channels
+                )
+            )
+        );
+        assert_eq!(
+            layout(&pre, "Gaussian"),
+            (
+                size_of::<GpuGaussian>() as u32,
+                offsets!(GpuGaussian, pos, opacity, rot, scale, _pad)
+            )
+        );
+        assert_eq!(layout(&pre, "Projected").0 as u64, PROJECTED_SIZE);
+        assert_eq!(
+            layout(&module("scan"), "ScanParams"),
+            (
+                size_of::<ScanParams>() as u32,
+                offsets!(ScanParams, count, num_blocks, total_index, _pad)
+            )
+        );
+        assert_eq!(
+            layout(&module("radix_sort"), "SortPass"),
+            (
+                size_of::<SortPass>() as u32,
+                offsets!(SortPass, shift, num_blocks, count_index, _pad)
+            )
+        );
+        assert_eq!(
+            layout(&module("present"), "Present"),
+            (
+                size_of::<PresentUniform>() as u32,
+                offsets!(
+                    PresentUniform,
+                    size,
+                    mode,
+                    srgb_target,
+                    rgb_channels,
+                    inv_depth_range,
+                    _pad
+                )
+            )
+        );
+        let rig = module("rig");
+        assert_eq!(
+            layout(&rig, "RigParams"),
+            (
+                size_of::<RigParams>() as u32,
+                offsets!(RigParams, template_count, uv_count, triangle_count, _pad)
+            )
+        );
+        assert_eq!(
+            layout(&rig, "TemplateGaussian"),
+            (
+                size_of::<TemplateGaussian>() as u32,
+                offsets!(TemplateGaussian, rot, scale, opacity)
+            )
+        );
+        assert_eq!(
+            layout(&rig, "UvGaussian"),
+            (
+                size_of::<UvGaussian>() as u32,
+                offsets!(
+                    UvGaussian, bary, triangle, offset, opacity, rot, scale, _pad
+                )
+            )
+        );
+        assert_eq!(layout(&rig, "TriangleFrame").0 as u64, TRIANGLE_FRAME_SIZE);
+        assert_eq!(
+            layout(&rig, "PosedVertex"),
+            (
+                size_of::<PosedVertex>() as u32,
+                offsets!(PosedVertex, position, skin)
+            )
+        );
+    }
 }

@@ -27,6 +27,9 @@ pub struct Frame {
     /// Splat at this fraction of the camera's resolution (1 = full): a UI lowers it while the
     /// user drags or plays, to keep up, and goes back to 1 when input settles.
     pub scale: f32,
+    /// Draw an avatar's coarse stand-in ([`Avatar::preview`]) instead of all its Gaussians, as
+    /// a UI does while the user drags or plays.
+    pub preview: bool,
 }
 
 #[derive(Clone)]
@@ -124,7 +127,7 @@ pub struct ViewReport {
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Source {
     Cloud(u64),
-    Avatar(u64),
+    Avatar { id: u64, preview: bool },
 }
 
 #[derive(PartialEq)]
@@ -142,6 +145,13 @@ struct MeshKey {
     style: MeshStyle,
 }
 
+/// The avatar on the GPU: all its Gaussians, and its stand-in for interaction once needed.
+struct ShownAvatar {
+    id: u64,
+    full: GpuAvatar,
+    preview: Option<GpuAvatar>,
+}
+
 /// The stats buffer's way back: copied into staging with a render, mapped a frame later.
 enum StatsReadback {
     Idle,
@@ -152,10 +162,11 @@ enum StatsReadback {
 pub struct ViewRenderer {
     pipelines: Arc<SplatPipelines>,
     splatter: Splatter,
-    /// The splatter's current input; an avatar is kept on the GPU while it is shown.
+    /// The splatter's current input; an avatar (and its coarse stand-in, once used) is kept on
+    /// the GPU while it is shown.
     source: Option<Source>,
-    avatar: Option<(u64, GpuAvatar)>,
-    rigged: Option<(u64, u64)>,
+    avatar: Option<ShownAvatar>,
+    rigged: Option<(Source, u64)>,
     last: Option<SplatKey>,
     present: PresentPass,
     present_uniform: wgpu::Buffer,
@@ -223,9 +234,7 @@ impl ViewRenderer {
                 if self.source != Some(source) {
                     self.source = Some(source);
                     self.last = None;
-                    if let Some((_, avatar)) = &mut self.avatar {
-                        avatar.detach();
-                    }
+                    self.detach_avatar();
                     if let Err(e) = self.splatter.upload(device, queue, &cloud.cloud) {
                         report.error = Some(e.to_string());
                     }
@@ -233,30 +242,43 @@ impl ViewRenderer {
                 self.prepare_splats(device, queue, None, false, frame, look, report)
             }
             Content::Avatar { avatar, pose, look } => {
-                let source = Source::Avatar(avatar.id);
-                if self.source != Some(source) {
-                    self.source = Some(source);
-                    self.last = None;
-                    self.rigged = None;
-                    if self.avatar.as_ref().is_none_or(|(id, _)| *id != avatar.id) {
-                        let gpu = GpuAvatar::new(
+                let source = Source::Avatar {
+                    id: avatar.id,
+                    preview: frame.preview,
+                };
+                if self.avatar.as_ref().is_none_or(|a| a.id != avatar.id) {
+                    self.avatar = Some(ShownAvatar {
+                        id: avatar.id,
+                        full: GpuAvatar::new(
                             device,
                             self.pipelines.clone(),
                             &avatar.avatar,
                             &avatar.triangles,
-                        );
-                        self.avatar = Some((avatar.id, gpu));
-                    }
+                        ),
+                        preview: None,
+                    });
                 }
-                let (_, gpu) = self.avatar.as_mut().expect("made above");
+                if self.source != Some(source) {
+                    self.source = Some(source);
+                    self.last = None;
+                    self.detach_avatar();
+                }
+                let shown = self.avatar.as_mut().expect("made above");
+                let gpu = match frame.preview {
+                    true => shown.preview.get_or_insert_with(|| {
+                        let preview = avatar.avatar.preview();
+                        GpuAvatar::new(device, self.pipelines.clone(), &preview, &avatar.triangles)
+                    }),
+                    false => &mut shown.full,
+                };
                 if let Err(e) = gpu.attach(device, queue, &mut self.splatter) {
                     report.error = Some(e.to_string());
                     return None;
                 }
                 let mut new_pose = false;
-                if self.rigged != Some((avatar.id, pose.id)) {
+                if self.rigged != Some((source, pose.id)) {
                     // Marked either way: a pose the avatar cannot take is reported once.
-                    self.rigged = Some((avatar.id, pose.id));
+                    self.rigged = Some((source, pose.id));
                     match gpu.set_pose(queue, &pose.posed) {
                         Ok(()) => new_pose = true,
                         Err(e) => report.error = Some(e.to_string()),
@@ -264,6 +286,16 @@ impl ViewRenderer {
                 }
                 let pose = Some(pose.id);
                 self.prepare_splats(device, queue, pose, new_pose, frame, look, report)
+            }
+        }
+    }
+
+    /// Forgets which avatar's Gaussians the splatter holds (something else takes their place).
+    fn detach_avatar(&mut self) {
+        if let Some(shown) = &mut self.avatar {
+            shown.full.detach();
+            if let Some(preview) = &mut shown.preview {
+                preview.detach();
             }
         }
     }
@@ -302,8 +334,13 @@ impl ViewRenderer {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("View::splat"),
             });
-            if new_pose && let Some((_, avatar)) = &self.avatar {
-                avatar.encode(&mut encoder);
+            if new_pose && let Some(shown) = &self.avatar {
+                let preview = matches!(self.source, Some(Source::Avatar { preview: true, .. }));
+                let gpu = match (preview, &shown.preview) {
+                    (true, Some(p)) => p,
+                    _ => &shown.full,
+                };
+                gpu.encode(&mut encoder);
                 report.rigs += 1;
             }
             self.splatter.encode(&mut encoder, None);

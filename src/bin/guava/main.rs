@@ -145,6 +145,9 @@ enum Bench {
     Reconstruct(bench::ReconstructBenchArgs),
     /// GUAVA mode's reconstruction with a folder of exported models, per stage.
     Guava(bench::GuavaBenchArgs),
+    /// A viewer frame of the default avatar, pose → pixels: the GPU-resident avatar against
+    /// rigging on the CPU, and an interaction replay at each resolution the viewer uses.
+    Frame(bench::FrameBenchArgs),
 }
 
 fn main() {
@@ -261,6 +264,7 @@ fn run(cli: Cli) -> Result<()> {
             Bench::Body(args) => bench::body(&args),
             Bench::Reconstruct(args) => bench::reconstruct(&args),
             Bench::Guava(args) => bench::guava(&args),
+            Bench::Frame(args) => bench::frame(&args),
         },
     }
 }

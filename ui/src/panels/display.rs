@@ -54,7 +54,7 @@ impl GuavaApp {
             .iter()
             .find(|(s, _)| s == scale)
             .map_or("?", |(_, name)| name);
-        egui::ComboBox::new("interactive_scale", "resolution while interacting")
+        egui::ComboBox::new("interactive_scale", "while interacting")
             .selected_text(current)
             .show_ui(ui, |ui| {
                 for (s, name) in INTERACTIVE_SCALES {
@@ -64,7 +64,8 @@ impl GuavaApp {
             .response
             .on_hover_text(
                 "while you drag, orbit or play, the splatting pass draws at this fraction of the \
-                 viewport's resolution, and at full resolution once input settles",
+                 viewport's resolution, and an avatar as one splat per triangle; at full \
+                 quality once input settles",
             );
     }
 

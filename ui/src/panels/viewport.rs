@@ -94,6 +94,7 @@ impl GuavaApp {
             } else {
                 1.0
             },
+            preview: self.interaction.active,
         };
         let callback = ViewportCallback {
             frame,

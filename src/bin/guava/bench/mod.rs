@@ -1,11 +1,13 @@
 //! Benchmarks behind `guava bench …`: each prints a table of medians and the hardware it ran on.
 
 mod body;
+mod frame;
 mod guava_mode;
 mod reconstruct;
 mod splat;
 
 pub use body::{BodyBenchArgs, body};
+pub use frame::{FrameBenchArgs, frame};
 pub use guava_mode::{GuavaBenchArgs, guava};
 pub use reconstruct::{ReconstructBenchArgs, reconstruct};
 pub use splat::{SplatBenchArgs, splat};

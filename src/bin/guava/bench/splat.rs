@@ -11,8 +11,8 @@ use glam::Vec3;
 use guava::camera::{Camera, orbit};
 use guava::gaussians::synthetic::BallCloud;
 use guava::gpu::GpuContext;
-use guava::render::readback::wait;
-use guava::render::timing::StageTimer;
+use guava::render::StageTimer;
+use guava::render::wait;
 use guava::render::{HeadlessRenderer, Stage};
 
 use super::median;

@@ -1,0 +1,113 @@
+//! A coarse stand-in of an avatar for frames drawn while the user drags, orbits or plays: one UV
+//! Gaussian per triangle in place of the (on average four or five) the avatar binds to it, at
+//! their mean place with their mean features, enlarged by √n so it covers what the n covered;
+//! no template Gaussians (they close cracks between UV islands, which the enlarged splats
+//! cover). The splatting pass's per-Gaussian stages (projection, both sorts) cost in proportion
+//! to the count, and on a CPU adapter they outweigh the pixels at any viewport size.
+
+use super::{Avatar, LocalGaussians, UvGaussians};
+
+impl Avatar {
+    /// The coarse stand-in (see the module): same body, same channels, no template Gaussians.
+    pub fn preview(&self) -> Avatar {
+        let uv = &self.uv;
+        let c = self.channels;
+        let mut by_triangle: Vec<Vec<usize>> = vec![Vec::new(); self.body_triangles];
+        for (i, &t) in uv.triangles.iter().enumerate() {
+            by_triangle[t as usize].push(i);
+        }
+        let mut out = UvGaussians::default();
+        for (t, members) in by_triangle.iter().enumerate() {
+            let Some(&first) = members.first() else {
+                continue;
+            };
+            let n = members.len() as f32;
+            let mean = |get: &dyn Fn(usize) -> [f32; 3]| {
+                members.iter().fold([0.0; 3], |acc, &i| {
+                    let v = get(i);
+                    [0, 1, 2].map(|k| acc[k] + v[k] / n)
+                })
+            };
+            out.triangles.push(t as u32);
+            out.barycentrics.push(mean(&|i| uv.barycentrics[i]));
+            out.offsets.push(mean(&|i| uv.offsets[i]));
+            let local = &mut out.local;
+            local.rotations.push(uv.local.rotations[first]);
+            local
+                .scales
+                .push(uv.local.scales[first].map(|s| s * n.sqrt()));
+            local.opacities.push(
+                members
+                    .iter()
+                    .map(|&i| uv.local.opacities[i])
+                    .fold(0.0, f32::max),
+            );
+            let start = local.features.len();
+            local.features.resize(start + c, 0.0);
+            for &i in members {
+                for (acc, v) in local.features[start..]
+                    .iter_mut()
+                    .zip(&uv.local.features[i * c..(i + 1) * c])
+                {
+                    *acc += v / n;
+                }
+            }
+        }
+        Avatar {
+            kind: self.kind,
+            body: self.body.clone(),
+            body_vertices: self.body_vertices,
+            body_triangles: self.body_triangles,
+            channels: self.channels,
+            identity: self.identity.clone(),
+            ehm_identity: self.ehm_identity.clone(),
+            source: self.source.clone(),
+            template: LocalGaussians::default(),
+            uv: out,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::avatar::{Avatar, AvatarKind, LocalGaussians, UvGaussians};
+
+    #[test]
+    fn one_splat_per_triangle_with_the_mean_colour_and_the_area_of_all() {
+        let local = |n: usize, features: Vec<f32>| LocalGaussians {
+            rotations: vec![[1.0, 0.0, 0.0, 0.0]; n],
+            scales: vec![[0.1, 0.01, 0.1]; n],
+            opacities: (0..n).map(|i| 0.5 + 0.1 * i as f32).collect(),
+            features,
+        };
+        let avatar = Avatar {
+            kind: AvatarKind::DefaultReconstruction,
+            body: "b".into(),
+            body_vertices: 3,
+            body_triangles: 2,
+            channels: 1,
+            identity: Default::default(),
+            ehm_identity: None,
+            source: "s".into(),
+            template: local(3, vec![0.0; 3]),
+            uv: UvGaussians {
+                triangles: vec![1, 1, 1, 1],
+                barycentrics: vec![
+                    [1.0, 0.0, 0.0],
+                    [0.0, 1.0, 0.0],
+                    [0.0, 0.0, 1.0],
+                    [1.0, 0.0, 0.0],
+                ],
+                offsets: vec![[0.0; 3]; 4],
+                local: local(4, vec![0.0, 1.0, 2.0, 3.0]),
+            },
+        };
+        let p = avatar.preview();
+        assert!(p.template.is_empty());
+        assert_eq!(p.uv.triangles, vec![1]);
+        assert_eq!(p.uv.local.features, vec![1.5]);
+        assert_eq!(p.uv.barycentrics, vec![[0.5, 0.25, 0.25]]);
+        assert_eq!(p.uv.local.scales, vec![[0.2, 0.02, 0.2]]);
+        assert!((p.uv.local.opacities[0] - 0.8).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,226 @@
+//! `guava bench frame`: what a frame of the viewer costs for the default avatar (the demo
+//! portrait's default reconstruction, played by the demo motion), pose → pixels.
+//!
+//! 1. **Frame path, side by side in one run**: posing the body on the CPU, then either the old
+//!    path (every Gaussian rigged on the CPU, re-packed and uploaded) or the GPU-resident avatar
+//!    (the posed vertices go up, the rig pass poses the Gaussians), then the splatting pass.
+//! 2. **Interaction**: a replay of what a user does — orbiting while the motion plays — through
+//!    the viewer's own view renderer, at full resolution and at the reduced ones the viewer uses
+//!    while input moves, as frames per second.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use super::body::cpu_name;
+use super::median;
+use guava::avatar::Rig;
+use guava::body::{BodyModel, BodyPose, PosedBody};
+use guava::camera::{Camera, orbit_y_up};
+use guava::gaussians::GaussianCloud;
+use guava::gpu::GpuContext;
+use guava::pipeline::{Mode, Photo, Pipeline, Tracked};
+use guava::render::view::{
+    AvatarRef, Content, Display, Frame, Look, PoseRef, ViewRenderer, ViewReport,
+};
+use guava::render::{GpuAvatar, HeadlessRenderer};
+use guava::tracking::{Retarget, demo_motion};
+
+#[derive(clap::Args, Clone, Debug)]
+pub struct FrameBenchArgs {
+    /// Timed frames per case (after 3 warm-up frames).
+    #[arg(long, default_value_t = 20)]
+    pub frames: usize,
+    /// The viewport's size for the interaction replay (the viewer's at 1280×800 is ~770×700).
+    #[arg(long, default_value_t = 768)]
+    pub width: u32,
+    #[arg(long, default_value_t = 704)]
+    pub height: u32,
+}
+
+pub fn frame(args: &FrameBenchArgs) -> anyhow::Result<()> {
+    let body = BodyModel::default_body()?;
+    let portrait =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png");
+    let outcome = Pipeline::default().reconstruct(
+        Mode::Default(&body),
+        Photo::File(&portrait),
+        Tracked::beside(&portrait),
+        &mut |_| true,
+    )?;
+    let avatar = Arc::new(outcome.avatar);
+    let motion = demo_motion()?;
+    let retarget = Retarget::new(&motion, &body);
+    let mut pose = BodyPose::rest(&body);
+    avatar.apply_identity(&body, &mut pose);
+    // Frame k of the demo motion at 30 fps: every frame is a new pose, as while it plays.
+    let mut pose_at = |k: usize, posed: &mut PosedBody| -> anyhow::Result<()> {
+        retarget.sample(&motion, k as f64 / 30.0 % motion.duration(), &mut pose);
+        body.pose(&pose, posed)?;
+        Ok(())
+    };
+    let mut renderer = HeadlessRenderer::new(GpuContext::headless()?);
+    let adapter = renderer.gpu.adapter_label();
+    println!(
+        "the demo portrait's default avatar ({} Gaussians, {} channels) played by the demo motion; \
+         {adapter}; CPU {}; medians of {} frames",
+        avatar.len(),
+        avatar.channels,
+        cpu_name(),
+        args.frames
+    );
+    let camera = outcome.view.camera;
+    let background = vec![0.0; avatar.channels];
+
+    println!("\npose → pixels at 512² through the photo's camera, ms per frame:");
+    println!(
+        "{:<44} {:>8} {:>10} {:>8} {:>8}",
+        "path", "pose", "rig+upload", "splat", "frame"
+    );
+    let mut posed = PosedBody::default();
+    let mut cloud = GaussianCloud::new(avatar.channels);
+    let mut rig = Rig::default();
+    let mut gpu_avatar = GpuAvatar::new(
+        &renderer.gpu.device,
+        renderer.pipelines.clone(),
+        &avatar,
+        &body.triangles,
+    );
+    let mut rows = Vec::new();
+    for gpu in [false, true] {
+        let mut times: [Vec<f64>; 4] = Default::default();
+        gpu_avatar.detach();
+        for k in 0..args.frames + 3 {
+            let t0 = Instant::now();
+            pose_at(k, &mut posed)?;
+            let t1 = Instant::now();
+            if gpu {
+                renderer.pose_avatar(&mut gpu_avatar, &posed)?;
+                // Waited for, so the rig pass is timed apart from the splatting.
+                guava::render::wait(&renderer.gpu.device);
+            } else {
+                rig.animate(&avatar, &posed, &body.triangles, &mut cloud)?;
+                let gpu = &renderer.gpu;
+                renderer.splatter.upload(&gpu.device, &gpu.queue, &cloud)?;
+            }
+            let t2 = Instant::now();
+            renderer.draw(&camera, &background);
+            let t3 = Instant::now();
+            if k >= 3 {
+                for (v, d) in times.iter_mut().zip([t1 - t0, t2 - t1, t3 - t2, t3 - t0]) {
+                    v.push(d.as_secs_f64() * 1e3);
+                }
+            }
+        }
+        let name = if gpu {
+            "GPU-resident avatar: pose up, rig pass"
+        } else {
+            "before: rig on the CPU, all Gaussians up"
+        };
+        let [p, r, s, f] = times.map(median);
+        println!("{name:<44} {p:>8.1} {r:>10.1} {s:>8.1} {f:>8.1}");
+        rows.push(f);
+    }
+    println!("ratio (GPU-resident / before): {:.2}", rows[1] / rows[0]);
+
+    interaction(args, &renderer.gpu, &avatar, &body, &mut pose_at)
+}
+
+/// The viewer's view renderer replaying an orbit while the motion plays, at each resolution
+/// scale the viewer offers while input moves.
+fn interaction(
+    args: &FrameBenchArgs,
+    gpu: &GpuContext,
+    avatar: &Arc<guava::avatar::Avatar>,
+    body: &BodyModel,
+    pose_at: &mut dyn FnMut(usize, &mut PosedBody) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let (device, queue) = (&gpu.device, &gpu.queue);
+    let mut view = ViewRenderer::new(
+        device,
+        &gpu.adapter.get_info(),
+        wgpu::TextureFormat::Rgba8UnormSrgb,
+    );
+    let mut report = ViewReport::default();
+    let triangles = Arc::new(body.triangles.clone());
+    let mut posed = PosedBody::default();
+    pose_at(0, &mut posed)?;
+    let (lo, hi) = posed
+        .vertices
+        .iter()
+        .fold((glam::Vec3::MAX, glam::Vec3::MIN), |(l, h), v| {
+            (l.min(*v), h.max(*v))
+        });
+    let target = 0.5 * (lo + hi);
+    let fov = 50f32.to_radians();
+    let distance = 0.5 * (hi - lo).length() / (0.5 * fov).sin();
+    println!(
+        "\ninteraction replay at {}×{} (orbiting 3° a frame while the motion plays), the \
+         viewer's view renderer:",
+        args.width, args.height
+    );
+    println!(
+        "{:<34} {:>12} {:>10} {:>10} {:>8}",
+        "while interacting", "splatted at", "Gaussians", "ms/frame", "fps"
+    );
+    let cases = [
+        (1.0, false, "full quality"),
+        (0.5, false, "½ resolution"),
+        (1.0 / 3.0, false, "⅓ resolution"),
+        (0.5, true, "½ + coarse (CPU default)"),
+        (1.0 / 3.0, true, "⅓ + coarse"),
+        (0.25, true, "¼ + coarse"),
+    ];
+    for (scale, preview, name) in cases {
+        let mut times = Vec::new();
+        for k in 0..args.frames + 3 {
+            let t0 = Instant::now();
+            pose_at(k, &mut posed)?;
+            let yaw = (3.0 * k as f32).to_radians();
+            let frame = Frame {
+                content: Content::Avatar {
+                    avatar: AvatarRef {
+                        id: 1,
+                        avatar: avatar.clone(),
+                        triangles: triangles.clone(),
+                    },
+                    pose: PoseRef {
+                        id: k as u64 + 1,
+                        posed: Arc::new(posed.clone()),
+                    },
+                    look: Look {
+                        background: vec![0.0; avatar.channels],
+                        display: Display::default(),
+                    },
+                },
+                camera: Camera::from_fov_y(
+                    orbit_y_up(target, distance, yaw, 0.0),
+                    args.width,
+                    args.height,
+                    fov,
+                ),
+                scale,
+                preview,
+            };
+            if let Some(commands) = view.prepare(device, queue, &frame, &mut report) {
+                queue.submit([commands]);
+            }
+            guava::render::wait(device);
+            if k >= 3 {
+                times.push(t0.elapsed().as_secs_f64() * 1e3);
+            }
+        }
+        let ms = median(times);
+        let [w, h] = report.rendered_size;
+        let count = if preview {
+            avatar.preview().len()
+        } else {
+            avatar.len()
+        };
+        println!(
+            "{name:<34} {:>12} {count:>10} {ms:>10.1} {:>8.1}",
+            format!("{w}×{h}"),
+            1e3 / ms
+        );
+    }
+    Ok(())
+}
