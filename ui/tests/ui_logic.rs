@@ -624,3 +624,36 @@ fn ehm_trackers_keypoint_models_place_the_fits_points() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// While the user drags in the viewport, the splatting pass draws at the interactive fraction of
+/// the viewport's resolution (½ on a CPU adapter), and at full resolution again once the button
+/// is released; an avatar is drawn as its coarse stand-in meanwhile (one splat per triangle).
+#[test]
+fn dragging_draws_at_reduced_resolution_and_settles_at_full() {
+    let mut h = harness(Options::default());
+    h.run();
+    h.state_mut().reconstruct_synthetic_photo();
+    wait_until(&mut h, |app| app.avatar_info().is_some());
+    for _ in 0..3 {
+        frame(&mut h);
+    }
+    let full = h.state().report().rendered_size;
+    let rigs = h.state().report().rigs;
+    assert!(full[0] > 300 && full[1] > 300, "{full:?}");
+    // Press in the viewport (right of the side panel) and move: an orbit drag.
+    let at = egui::pos2(900.0, 350.0);
+    h.hover_at(at);
+    h.drag_at(at);
+    for dx in [10.0, 20.0, 30.0] {
+        h.hover_at(at + egui::vec2(dx, 0.0));
+        frame(&mut h);
+    }
+    let half = full.map(|side| (side as f32 * 0.5).round() as u32);
+    assert_eq!(h.state().report().rendered_size, half, "while dragging");
+    assert!(h.state().report().rigs > rigs, "the stand-in is rigged");
+    h.drop_at(at + egui::vec2(30.0, 0.0));
+    for _ in 0..3 {
+        frame(&mut h);
+    }
+    assert_eq!(h.state().report().rendered_size, full, "settled");
+}
