@@ -7,15 +7,16 @@
 //! (the reference's [C, H, W]) for the refiner and the present pass; `aux()` holds alpha (layer 0)
 //! and inverse depth (layer 1).
 
+mod buffers;
+
 use super::layout::{FrameUniform, GpuGaussian, PROJECTED_SIZE};
 use super::pipelines::{SplatPipelines, dispatch_1d};
 use super::readback::{read_buffers, read_texture_layers};
-use super::scan::{PrefixScan, entry};
-use super::sort::{RadixSort, SortBuffers};
 use super::timing::StageTimer;
 use super::{RenderStats, SplatError, SplatImage};
 use crate::camera::Camera;
 use crate::gaussians::GaussianCloud;
+use buffers::{Bindings, CloudBuffers, ViewBuffers, storage};
 use std::sync::Arc;
 
 /// The GPU stages, in order; benchmarks time each.
@@ -55,46 +56,6 @@ const STATS_WORDS: u64 = 8;
 const MIN_GAUSSIANS: u32 = 256;
 const MIN_PAIRS: u32 = 1 << 16;
 
-struct CloudBuffers {
-    capacity: u32,
-    channels: u32,
-    gaussians: wgpu::Buffer,
-    features: wgpu::Buffer,
-    projected: wgpu::Buffer,
-    depth_keys: wgpu::Buffer,
-    depth_order: wgpu::Buffer,
-    depth_keys_tmp: wgpu::Buffer,
-    depth_order_tmp: wgpu::Buffer,
-    touched: wgpu::Buffer,
-    pair_offsets: wgpu::Buffer,
-}
-
-struct ViewBuffers {
-    width: u32,
-    height: u32,
-    channels: u32,
-    pair_capacity: u32,
-    tile_keys: wgpu::Buffer,
-    tile_vals: wgpu::Buffer,
-    tile_keys_tmp: wgpu::Buffer,
-    tile_vals_tmp: wgpu::Buffer,
-    ranges: wgpu::Buffer,
-    out_features: wgpu::Texture,
-    out_aux: wgpu::Texture,
-    background: wgpu::Buffer,
-}
-
-struct Bindings {
-    preprocess: wgpu::BindGroup,
-    depth_sort: RadixSort,
-    pair_scan: PrefixScan,
-    keys: wgpu::BindGroup,
-    tile_sort: RadixSort,
-    ranges: wgpu::BindGroup,
-    rasterize: wgpu::BindGroup,
-    rasterize_pipeline: wgpu::ComputePipeline,
-}
-
 pub struct Splatter {
     pipes: Arc<SplatPipelines>,
     frame: wgpu::Buffer,
@@ -110,41 +71,6 @@ pub struct Splatter {
     buffers_generation: u64,
     camera: Option<Camera>,
     max_pairs: u32,
-}
-
-fn storage(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: size.max(16),
-        usage: wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_DST
-            | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    })
-}
-
-fn output_texture(
-    device: &wgpu::Device,
-    label: &str,
-    camera: &Camera,
-    layers: u32,
-) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: camera.width,
-            height: camera.height,
-            depth_or_array_layers: layers,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::R32Float,
-        usage: wgpu::TextureUsages::STORAGE_BINDING
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
 }
 
 /// Floats per Gaussian in the GPU feature buffer: the channels padded to a multiple of four, which
@@ -314,31 +240,6 @@ impl Splatter {
         bytemuck::cast_slice(&bytes[0]).to_vec()
     }
 
-    fn alloc_cloud(device: &wgpu::Device, capacity: u32, channels: u32) -> CloudBuffers {
-        let n = capacity as u64;
-        CloudBuffers {
-            capacity,
-            channels,
-            gaussians: storage(
-                device,
-                "Splat::gaussians",
-                n * size_of::<GpuGaussian>() as u64,
-            ),
-            features: storage(
-                device,
-                "Splat::features",
-                n * feature_stride(channels) as u64 * 4,
-            ),
-            projected: storage(device, "Splat::projected", n * PROJECTED_SIZE),
-            depth_keys: storage(device, "Splat::depth_keys", n * 4),
-            depth_order: storage(device, "Splat::depth_order", n * 4),
-            depth_keys_tmp: storage(device, "Splat::depth_keys_tmp", n * 4),
-            depth_order_tmp: storage(device, "Splat::depth_order_tmp", n * 4),
-            touched: storage(device, "Splat::touched", n * 4),
-            pair_offsets: storage(device, "Splat::pair_offsets", n * 4),
-        }
-    }
-
     /// Sets the camera and background for the next [`Self::encode`]; sizes the view's buffers.
     /// Call after [`Self::upload`]. `background` has one value per channel.
     pub fn prepare(
@@ -386,7 +287,7 @@ impl Splatter {
         if self.bindings.is_none() {
             self.bindings = Some(self.bind(device, camera));
         }
-        let (tiles_x, tiles_y) = super::tile_grid(camera);
+        let (tiles_x, tiles_y) = crate::render::tile_grid(camera);
         let (Some(view), Some(bindings)) = (&self.view, &self.bindings) else {
             return;
         };
@@ -406,163 +307,6 @@ impl Splatter {
         queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
         queue.write_buffer(&view.background, 0, bytemuck::cast_slice(background));
         self.camera = Some(*camera);
-    }
-
-    fn alloc_view(
-        device: &wgpu::Device,
-        camera: &Camera,
-        channels: u32,
-        pair_capacity: u32,
-    ) -> ViewBuffers {
-        let (tx, ty) = super::tile_grid(camera);
-        let pairs = pair_capacity as u64;
-        ViewBuffers {
-            width: camera.width,
-            height: camera.height,
-            channels,
-            pair_capacity,
-            tile_keys: storage(device, "Splat::tile_keys", pairs * 4),
-            tile_vals: storage(device, "Splat::tile_vals", pairs * 4),
-            tile_keys_tmp: storage(device, "Splat::tile_keys_tmp", pairs * 4),
-            tile_vals_tmp: storage(device, "Splat::tile_vals_tmp", pairs * 4),
-            ranges: storage(device, "Splat::tile_ranges", tx as u64 * ty as u64 * 8),
-            out_features: output_texture(device, "Splat::out_features", camera, channels),
-            out_aux: output_texture(device, "Splat::out_aux", camera, 2),
-            background: storage(device, "Splat::background", channels as u64 * 4),
-        }
-    }
-
-    fn bind(&self, device: &wgpu::Device, camera: &Camera) -> Bindings {
-        let (Some(c), Some(v)) = (&self.cloud, &self.view) else {
-            unreachable!("bind is called after both buffer sets exist");
-        };
-        let pipes = &*self.pipes;
-        let group = |label: &str, layout: &wgpu::BindGroupLayout, buffers: &[&wgpu::Buffer]| {
-            let entries: Vec<_> = buffers
-                .iter()
-                .enumerate()
-                .map(|(i, b)| entry(i as u32, b))
-                .collect();
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(label),
-                layout,
-                entries: &entries,
-            })
-        };
-        let preprocess = group(
-            "Splat::preprocess",
-            &pipes.preprocess_layout,
-            &[
-                &self.frame,
-                &c.gaussians,
-                &c.features,
-                &c.projected,
-                &c.depth_keys,
-                &c.depth_order,
-                &c.touched,
-                &self.stats,
-            ],
-        );
-        let depth_sort = RadixSort::new(
-            device,
-            pipes,
-            "Splat::depth_sort",
-            SortBuffers {
-                count: &self.depth_count,
-                count_index: 0,
-                keys_a: &c.depth_keys,
-                vals_a: &c.depth_order,
-                keys_b: &c.depth_keys_tmp,
-                vals_b: &c.depth_order_tmp,
-            },
-            c.capacity,
-            32,
-        );
-        // gather_counts and emit_keys read the depth order where the sort left it.
-        let depth_order = depth_sort.sorted(&c.depth_order, &c.depth_order_tmp);
-        let pair_scan = PrefixScan::new(
-            device,
-            pipes,
-            "Splat::pair_scan",
-            &c.pair_offsets,
-            c.capacity,
-            &self.pair_count,
-            0,
-        );
-        let keys = group(
-            "Splat::tile_keys",
-            &pipes.keys_layout,
-            &[
-                &self.frame,
-                depth_order,
-                &c.touched,
-                &c.pair_offsets,
-                &c.projected,
-                &v.tile_keys,
-                &v.tile_vals,
-                &self.pair_count,
-                &self.stats,
-            ],
-        );
-        let (tx, ty) = super::tile_grid(camera);
-        let tile_bits = 32 - (tx * ty).saturating_sub(1).leading_zeros();
-        let tile_sort = RadixSort::new(
-            device,
-            pipes,
-            "Splat::tile_sort",
-            SortBuffers {
-                count: &self.pair_count,
-                count_index: 1,
-                keys_a: &v.tile_keys,
-                vals_a: &v.tile_vals,
-                keys_b: &v.tile_keys_tmp,
-                vals_b: &v.tile_vals_tmp,
-            },
-            v.pair_capacity,
-            tile_bits,
-        );
-        // The tile sort's pass count follows the tile count; read its result where it landed.
-        let (sorted_keys, sorted_vals) = tile_sort.sorted(
-            (&v.tile_keys, &v.tile_vals),
-            (&v.tile_keys_tmp, &v.tile_vals_tmp),
-        );
-        let ranges = group(
-            "Splat::tile_ranges",
-            &pipes.ranges_layout,
-            &[sorted_keys, &self.pair_count, &v.ranges],
-        );
-        let features_view = array_view(&v.out_features);
-        let aux_view = array_view(&v.out_aux);
-        let rasterize = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("Splat::rasterize"),
-            layout: &pipes.rasterize_layout,
-            entries: &[
-                entry(0, &self.frame),
-                entry(1, &v.ranges),
-                entry(2, sorted_vals),
-                entry(3, &c.projected),
-                entry(4, &c.features),
-                entry(5, &v.background),
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: wgpu::BindingResource::TextureView(&features_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 7,
-                    resource: wgpu::BindingResource::TextureView(&aux_view),
-                },
-            ],
-        });
-        Bindings {
-            preprocess,
-            depth_sort,
-            pair_scan,
-            keys,
-            tile_sort,
-            ranges,
-            rasterize,
-            rasterize_pipeline: pipes.rasterize(device, c.channels),
-        }
     }
 
     /// Records the whole pass. [`Self::prepare`] must have been called for this frame.
@@ -622,7 +366,7 @@ impl Splatter {
                 dispatch_1d(&mut pass, v.pair_capacity.div_ceil(256));
             }
             Stage::Rasterize => {
-                let (tx, ty) = super::tile_grid(camera);
+                let (tx, ty) = crate::render::tile_grid(camera);
                 pass.set_pipeline(&b.rasterize_pipeline);
                 pass.set_bind_group(0, &b.rasterize, &[]);
                 pass.dispatch_workgroups(tx, ty, 1);
