@@ -135,6 +135,13 @@ impl Camera {
         )
     }
 
+    /// The world point at view depth `z` on the ray through pixel-edge coordinates (x, y): the
+    /// inverse of [`Self::project`].
+    pub fn unproject(&self, x: f32, y: f32, z: f32) -> Vec3 {
+        let view = Vec3::new((x - self.cx) * z / self.fx, (y - self.cy) * z / self.fy, z);
+        self.view_from_world.inverse().transform_point3(view)
+    }
+
     /// Metres covered by one pixel at view depth `z` (the larger of the two axes).
     pub fn pixel_footprint(&self, z: f32) -> f32 {
         z / self.fx.min(self.fy)

@@ -7,6 +7,7 @@ pub mod atomic_file;
 pub mod avatar;
 pub mod body;
 pub mod camera;
+pub mod eval;
 pub mod fit;
 pub mod gaussians;
 pub mod gpu;

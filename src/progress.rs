@@ -16,6 +16,8 @@ pub enum Stage {
     /// GUAVA mode: DINOv2 and its feature head on the photo.
     Encode,
     Pose,
+    /// The clothing layer: offsets from the body fitted to the person's silhouette.
+    Dress,
     Rasterize,
     TextureMap,
     Fill,
@@ -24,16 +26,20 @@ pub enum Stage {
     /// GUAVA mode: the UV StyleUNet and its Gaussian heads.
     DecodeUv,
     Gaussians,
+    /// Gaussians for the person's pixels the body does not cover (hair, loose clothing).
+    Extras,
 }
 
 impl Stage {
     /// The stages of the default reconstruction proper (after the photo's view is known).
-    pub const DEFAULT: [Stage; 5] = [
+    pub const DEFAULT: [Stage; 7] = [
         Stage::Pose,
+        Stage::Dress,
         Stage::Rasterize,
         Stage::TextureMap,
         Stage::Fill,
         Stage::Gaussians,
+        Stage::Extras,
     ];
 
     pub fn name(self) -> &'static str {
@@ -45,10 +51,12 @@ impl Stage {
             Stage::DecodeVertices => "template-Gaussian decoder",
             Stage::DecodeUv => "UV decoder (StyleUNet)",
             Stage::Pose => "pose source body",
+            Stage::Dress => "clothing to the silhouette",
             Stage::Rasterize => "rasterize (visibility, mask)",
             Stage::TextureMap => "inverse texture mapping",
             Stage::Fill => "fill (mirror, push-pull)",
             Stage::Gaussians => "build Gaussians",
+            Stage::Extras => "Gaussians beyond the body",
         }
     }
 }

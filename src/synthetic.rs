@@ -1,6 +1,7 @@
-//! Synthetic photos with known answers: the body, textured with a smooth pattern over its rest
-//! surface, posed and drawn from a known camera, with its exact tracking. Reconstruction tests
-//! and `guava synth-photo` use them; they are labelled synthetic wherever they appear.
+//! Synthetic photos with known answers: the body (bare, or in a jacket, with hair), textured
+//! with smooth patterns over its rest surface, posed and drawn from a known camera, with its exact
+//! tracking. Reconstruction tests, `guava synth-photo` and the fidelity benchmark use them; they
+//! are labelled synthetic wherever they appear.
 
 use glam::Vec3;
 use image::{Rgba, RgbaImage};
@@ -38,28 +39,291 @@ pub fn upper_body_camera(body: &BodyModel, yaw: f32) -> Camera {
 }
 
 /// The body posed by `pose`, seen by `camera`, coloured by `colour` of each pixel's rest-surface
-/// point; alpha 255 on the body, 0 elsewhere.
+/// point: [`Subject::bare`] drawn by [`Subject::photo`].
 pub fn photo(
     body: &BodyModel,
     pose: &BodyPose,
     camera: &Camera,
     colour: impl Fn(Vec3) -> [f32; 3],
 ) -> Result<RgbaImage, PoseError> {
-    let mut posed = PosedBody::default();
-    body.pose(pose, &mut posed)?;
-    let f = rasterize(&posed.vertices, &body.triangles, camera);
-    let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-    Ok(RgbaImage::from_fn(camera.width, camera.height, |x, y| {
-        let i = f.index(x, y);
-        if f.triangle[i] < 0 {
-            return Rgba([0, 0, 0, 0]);
+    Subject::bare(body).photo(pose, camera, |p, _| colour(p))
+}
+
+/// What a point of a synthetic subject is, for its colour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Material {
+    Skin,
+    Cloth,
+    Hair,
+}
+
+/// A mesh carried rigidly by one joint of the body (hair), in the body's rest space.
+#[derive(Clone, Debug)]
+pub struct Rigid {
+    pub joint: usize,
+    pub vertices: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// A synthetic person with known geometry: the body, clothing that stands off it along its normals
+/// (a displacement per vertex, 0 for bare skin), and hair as a mesh of its own riding the head.
+/// Drawn from any camera in any pose it is the ground truth a reconstruction from one of its
+/// photos is measured against.
+#[derive(Clone, Debug)]
+pub struct Subject<'a> {
+    pub name: &'static str,
+    pub body: &'a BodyModel,
+    /// Metres along the posed normal, per body vertex; empty for none.
+    pub clothing: Vec<f32>,
+    pub hair: Option<Rigid>,
+}
+
+/// Photos are drawn this many times finer and box-filtered, so their edges are antialiased as a
+/// camera's are.
+const SUPERSAMPLE: u32 = 3;
+
+impl<'a> Subject<'a> {
+    pub fn bare(body: &'a BodyModel) -> Self {
+        Self {
+            name: "bare",
+            body,
+            clothing: Vec::new(),
+            hair: None,
         }
-        let tri = body.triangles[f.triangle[i] as usize];
-        let b = f.bary[i];
-        let rest: Vec3 = (0..3).map(|k| b[k] * body.vertices[tri[k] as usize]).sum();
-        let [r, g, bl] = colour(rest);
-        Rgba([q(r), q(g), q(bl), 255])
-    }))
+    }
+
+    /// The body in a jacket: torso and arms 2.5 cm out, hips 3 cm, and a hem that flares to
+    /// 6 cm off the thighs 12 cm below the hips and ends there.
+    pub fn clothed(body: &'a BodyModel) -> Self {
+        Self {
+            name: "clothed",
+            clothing: jacket(body),
+            ..Self::bare(body)
+        }
+    }
+
+    /// The body with a hair volume over the top and back of its head (up to 5 cm thick).
+    pub fn haired(body: &'a BodyModel) -> Self {
+        Self {
+            name: "haired",
+            hair: hair_volume(body),
+            ..Self::bare(body)
+        }
+    }
+
+    /// Both.
+    pub fn clothed_and_haired(body: &'a BodyModel) -> Self {
+        Self {
+            name: "clothed and haired",
+            clothing: jacket(body),
+            hair: hair_volume(body),
+            ..Self::bare(body)
+        }
+    }
+
+    /// Every triangle of the subject posed by `pose` (body first, then hair), with each vertex's
+    /// rest point and material.
+    fn posed_mesh(&self, pose: &BodyPose) -> Result<PosedMesh, PoseError> {
+        let body = self.body;
+        let mut posed = PosedBody::default();
+        body.pose(pose, &mut posed)?;
+        let mut vertices = posed.vertices.clone();
+        if !self.clothing.is_empty() {
+            let (mut normals, mut scratch) = (Vec::new(), Vec::new());
+            vertex_normals(
+                &posed.vertices,
+                &body.triangles,
+                Some(&body.weld),
+                &mut scratch,
+                &mut normals,
+            );
+            for ((v, n), d) in vertices.iter_mut().zip(&normals).zip(&self.clothing) {
+                *v += *n * *d;
+            }
+        }
+        let mut rest = body.vertices.clone();
+        let mut materials: Vec<Material> = (0..body.vertices.len())
+            .map(|v| match self.clothing.get(v) {
+                Some(&d) if d > 0.0 => Material::Cloth,
+                _ => Material::Skin,
+            })
+            .collect();
+        let mut triangles = body.triangles.clone();
+        if let Some(hair) = &self.hair {
+            let frame = posed.joints[hair.joint];
+            let origin = posed.rest_joints[hair.joint];
+            let base = vertices.len() as u32;
+            vertices.extend(
+                hair.vertices
+                    .iter()
+                    .map(|&p| frame.transform_point3(p - origin)),
+            );
+            rest.extend(&hair.vertices);
+            materials.extend(hair.vertices.iter().map(|_| Material::Hair));
+            triangles.extend(hair.triangles.iter().map(|t| t.map(|i| i + base)));
+        }
+        Ok(PosedMesh {
+            vertices,
+            rest,
+            materials,
+            triangles,
+        })
+    }
+
+    /// The subject posed by `pose`, seen by `camera`, each pixel coloured by `colour` of its rest
+    /// point and material; antialiased, alpha the share of the pixel it covers (straight alpha,
+    /// as PNG stores it).
+    pub fn photo(
+        &self,
+        pose: &BodyPose,
+        camera: &Camera,
+        colour: impl Fn(Vec3, Material) -> [f32; 3],
+    ) -> Result<RgbaImage, PoseError> {
+        let mesh = self.posed_mesh(pose)?;
+        let fine = camera.scaled(SUPERSAMPLE as f32);
+        let f = rasterize(&mesh.vertices, &mesh.triangles, &fine);
+        let s = SUPERSAMPLE;
+        let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+        Ok(RgbaImage::from_fn(camera.width, camera.height, |x, y| {
+            let (mut sum, mut covered) = (Vec3::ZERO, 0u32);
+            for (fx, fy) in (0..s * s).map(|k| (x * s + k % s, y * s + k / s)) {
+                let i = f.index(fx, fy);
+                let Ok(t) = usize::try_from(f.triangle[i]) else {
+                    continue;
+                };
+                let tri = mesh.triangles[t];
+                let b = f.bary[i];
+                let rest: Vec3 = (0..3).map(|k| b[k] * mesh.rest[tri[k] as usize]).sum();
+                // The material of the corner the point is nearest.
+                let corner = (0..3).fold(0, |m, k| if b[k] > b[m] { k } else { m });
+                sum += Vec3::from(colour(rest, mesh.materials[tri[corner] as usize]));
+                covered += 1;
+            }
+            if covered == 0 {
+                return Rgba([0, 0, 0, 0]);
+            }
+            let c = sum / covered as f32;
+            Rgba([q(c.x), q(c.y), q(c.z), q(covered as f32 / (s * s) as f32)])
+        }))
+    }
+}
+
+struct PosedMesh {
+    vertices: Vec<Vec3>,
+    rest: Vec<Vec3>,
+    materials: Vec<Material>,
+    triangles: Vec<[u32; 3]>,
+}
+
+/// Each vertex's most weighted joint's name.
+fn dominant_joints(body: &BodyModel) -> Vec<&str> {
+    body.skin_joints
+        .iter()
+        .zip(&body.skin_weights)
+        .map(|(js, ws)| {
+            let k = (0..js.len()).fold(0, |m, k| if ws[k] > ws[m] { k } else { m });
+            body.joints[js[k] as usize].name.as_str()
+        })
+        .collect()
+}
+
+/// [`Subject::clothed`]'s displacements.
+fn jacket(body: &BodyModel) -> Vec<f32> {
+    let hip_y = body
+        .joint_index("upperleg01.L")
+        .map_or(0.9, |j| body.joints[j].rest.y);
+    const HEM_DROP: f32 = 0.12;
+    dominant_joints(body)
+        .iter()
+        .zip(&body.vertices)
+        .map(|(joint, v)| {
+            let torso = joint.starts_with("spine")
+                || joint.starts_with("clavicle")
+                || joint.starts_with("shoulder")
+                || joint.starts_with("upperarm")
+                || joint.starts_with("lowerarm");
+            if torso {
+                0.025
+            } else if joint.starts_with("pelvis") || *joint == "root" {
+                0.03
+            } else if joint.starts_with("upperleg01") && v.y > hip_y - HEM_DROP {
+                // The flare: from the hips' 3 cm to 6 cm at the hem.
+                0.03 + 0.03 * ((hip_y - v.y) / HEM_DROP).clamp(0.0, 1.0)
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// [`Subject::haired`]'s hair: the skin of the head's top and back, from the hairline (at the
+/// brow's height in front, the nape behind) out along its normals by up to 5 cm, riding the head.
+fn hair_volume(body: &BodyModel) -> Option<Rigid> {
+    let head = body.joint_index("head")?;
+    let joints = dominant_joints(body);
+    let centre = body.joints[head].rest;
+    let (mut normals, mut scratch) = (Vec::new(), Vec::new());
+    vertex_normals(
+        &body.vertices,
+        &body.triangles,
+        Some(&body.weld),
+        &mut scratch,
+        &mut normals,
+    );
+    // How far into the hair a head vertex is: 0 at the hairline, 1 at the crown and the back.
+    let depth = |v: usize| -> f32 {
+        let p = body.vertices[v] - centre;
+        let front = (p.y - 0.05) / 0.06;
+        let back = (-p.z - 0.02) / 0.05 + (p.y + 0.06) / 0.08;
+        front.max(back.min(1.0)).clamp(0.0, 1.0)
+    };
+    let is_scalp =
+        |v: usize| joints[v] == "head" && body.part_of(v) == Some("head") && depth(v) > 0.0;
+    let mut index = vec![u32::MAX; body.vertices.len()];
+    let mut vertices = Vec::new();
+    let mut triangles = Vec::new();
+    for t in &body.triangles {
+        if !t.iter().all(|&v| is_scalp(v as usize)) {
+            continue;
+        }
+        let mapped = t.map(|v| {
+            let v = v as usize;
+            if index[v] == u32::MAX {
+                index[v] = vertices.len() as u32;
+                let d = depth(v);
+                vertices.push(body.vertices[v] + normals[v] * (0.005 + 0.045 * d * d));
+            }
+            index[v]
+        });
+        triangles.push(mapped);
+    }
+    Some(Rigid {
+        joint: head,
+        vertices,
+        triangles,
+    })
+}
+
+/// Colours of the synthetic subjects: a smooth skin tone, banded cloth and streaked hair, each a
+/// function of the rest point so every view and pose of a subject agrees.
+pub fn subject_texture(p: Vec3, material: Material) -> [f32; 3] {
+    match material {
+        Material::Skin => [
+            0.80 + 0.08 * (5.0 * p.y).sin(),
+            0.60 + 0.06 * (4.0 * p.x + 1.0).sin(),
+            0.50 + 0.05 * (3.0 * p.z).cos(),
+        ],
+        Material::Cloth => [
+            0.20 + 0.15 * (14.0 * p.y + 3.0 * p.x).sin(),
+            0.35 + 0.2 * (11.0 * p.x - 6.0 * p.z).sin(),
+            0.60 + 0.25 * (9.0 * p.y).cos(),
+        ],
+        Material::Hair => [
+            0.30 + 0.08 * (60.0 * p.x).sin(),
+            0.18 + 0.05 * (60.0 * p.x).sin(),
+            0.10,
+        ],
+    }
 }
 
 /// A plainly lit drawing of `body` with its surface at `vertices` (rest or posed), as
@@ -78,7 +342,7 @@ pub fn shaded(
     vertex_normals(
         vertices,
         &body.triangles,
-        &body.weld,
+        Some(&body.weld),
         &mut scratch,
         &mut normals,
     );

@@ -390,6 +390,8 @@ fn animation_matches_the_reference_ubody_gaussian() {
         identity: Default::default(),
         ehm_identity: None,
         source: "animation_parity.npz".into(),
+        source_view: None,
+        displacements: Vec::new(),
         template: LocalGaussians {
             rotations: array("template_rotations", 4),
             scales: triples("template_scales"),
@@ -418,7 +420,7 @@ fn animation_matches_the_reference_ubody_gaussian() {
             &mut posed,
             &mut EhmExtras::default(),
         );
-        rig.animate(&avatar, &posed, &model.triangles, &mut cloud)
+        rig.animate(&avatar, &posed, &model, &mut cloud)
             .expect("avatar fits the body");
         let slice = |name: &str| {
             let all = floats(name);

@@ -219,7 +219,7 @@ fn reconstruction_with_reduced_networks_animates_and_refuses_mismatches() {
     let mut posed = PosedBody::default();
     model.pose(&view.pose, &mut posed).expect("pose");
     let (mut rig, mut cloud) = (Rig::default(), GaussianCloud::default());
-    rig.animate(&avatar, &posed, &model.triangles, &mut cloud)
+    rig.animate(&avatar, &posed, &model, &mut cloud)
         .expect("animates");
     assert_eq!(cloud.len(), avatar.len());
     assert!(cloud.positions.iter().flatten().all(|v| v.is_finite()));

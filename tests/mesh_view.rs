@@ -47,7 +47,7 @@ impl View {
         vertex_normals(
             &posed.vertices,
             &self.model.triangles,
-            &self.model.weld,
+            Some(&self.model.weld),
             &mut scratch,
             &mut normals,
         );

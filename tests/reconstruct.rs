@@ -50,7 +50,7 @@ fn cloud_for(avatar: &Avatar, pose: &BodyPose) -> GaussianCloud {
     body().pose(pose, &mut posed).expect("pose");
     let mut cloud = GaussianCloud::new(avatar.channels);
     Rig::default()
-        .animate(avatar, &posed, &body().triangles, &mut cloud)
+        .animate(avatar, &posed, body(), &mut cloud)
         .expect("same body");
     cloud
 }
@@ -403,6 +403,14 @@ fn avatar_file_round_trips_bit_identically_and_names_bad_fields() {
     let image = photo(body, &view.pose, &view.camera, banded_texture).expect("photo");
     let (mut avatar, _) = reconstruct(&view, &image).expect("reconstruct");
     avatar.identity.insert("weight-max".into(), 0.25);
+    assert_eq!(
+        avatar.source_view.as_ref(),
+        Some(&view),
+        "the avatar keeps its view"
+    );
+    avatar.displacements = (0..body.vertices.len())
+        .map(|v| 0.01 * (v as f32).sin())
+        .collect();
     let dir = std::env::temp_dir().join(format!("guava-avatar-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
     let path = dir.join("a.guava");
@@ -418,6 +426,25 @@ fn avatar_file_round_trips_bit_identically_and_names_bad_fields() {
             .collect()
     };
     assert_eq!(bits(&back), bits(&avatar));
+    let displacement_bits =
+        |a: &Avatar| -> Vec<u32> { a.displacements.iter().map(|x| x.to_bits()).collect() };
+    assert_eq!(displacement_bits(&back), displacement_bits(&avatar));
+
+    // A version 1 file (before the source view and displacements) still reads.
+    let mut old = avatar.clone();
+    (old.source_view, old.displacements) = (None, Vec::new());
+    old.save(&path).expect("save");
+    let v2 = std::fs::read(&path).expect("read");
+    let v1 = [
+        b"guava-rs avatar 1".as_slice(),
+        &v2["guava-rs avatar 2".len()..],
+    ]
+    .concat();
+    assert_eq!(
+        Avatar::from_bytes(&v1, "old.guava").expect("version 1"),
+        old
+    );
+    avatar.save(&path).expect("save");
 
     let bytes = std::fs::read(&path).expect("read");
     let expect_error = |data: &[u8], needle: &str| {
@@ -444,6 +471,16 @@ fn avatar_file_round_trips_bit_identically_and_names_bad_fields() {
     let mut bad = bytes.clone();
     bad[opacity0..opacity0 + 4].copy_from_slice(&f32::NAN.to_le_bytes());
     expect_error(&bad, "uv opacities[0]");
+    let mut bad = bytes.clone();
+    let last = bytes.len() - 4;
+    bad[last..].copy_from_slice(&f32::INFINITY.to_le_bytes());
+    expect_error(&bad, "displacements value");
+    let v1_with_view = [
+        b"guava-rs avatar 1".as_slice(),
+        &bytes["guava-rs avatar 2".len()..],
+    ]
+    .concat();
+    expect_error(&v1_with_view, "a version 1 file has no source_view");
     // A failed save leaves the old file as it was.
     let missing_dir = dir.join("no/such/dir/a.guava");
     assert!(avatar.save(&missing_dir).is_err());
@@ -547,6 +584,7 @@ fn the_gpu_rig_matches_the_cpu_rig() {
         renderer.pipelines.clone(),
         &avatar,
         &body.triangles,
+        Some(&body.weld),
     );
     assert_eq!(gpu_avatar.len(), avatar.len());
     let other = guava::gaussians::synthetic::torus_knot(200_000, 2);

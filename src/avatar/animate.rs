@@ -6,8 +6,8 @@
 
 use glam::{Mat3A, Vec3};
 
-use super::Avatar;
-use crate::body::{PosedBody, TriangleFrame, triangle_frames};
+use super::{Avatar, Dressing};
+use crate::body::{Posable, PosedBody, TriangleFrame, triangle_frames};
 use crate::gaussians::GaussianCloud;
 
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
@@ -27,17 +27,20 @@ pub struct BodyMismatch {
 #[derive(Clone, Debug, Default)]
 pub struct Rig {
     frames: Vec<TriangleFrame>,
+    dressing: Dressing,
 }
 
 impl Rig {
-    /// The avatar's Gaussians on the posed body `posed` (whose mesh has `triangles`), into `out`.
+    /// The avatar's Gaussians on `body` posed as `posed` (dressed in the avatar's clothing
+    /// first), into `out`.
     pub fn animate(
         &mut self,
         avatar: &Avatar,
         posed: &PosedBody,
-        triangles: &[[u32; 3]],
+        body: &impl Posable,
         out: &mut GaussianCloud,
     ) -> Result<(), BodyMismatch> {
+        let triangles = body.triangles();
         if posed.vertices.len() != avatar.body_vertices
             || posed.skin.len() != avatar.body_vertices
             || triangles.len() != avatar.body_triangles
@@ -57,8 +60,14 @@ impl Rig {
         out.opacities.clear();
         out.features.clear();
 
+        let vertices = self.dressing.apply(
+            &avatar.displacements,
+            &posed.vertices,
+            triangles,
+            body.weld(),
+        );
         let t = &avatar.template;
-        for ((v, skin), &r) in posed.vertices.iter().zip(&posed.skin).zip(&t.rotations) {
+        for ((v, skin), &r) in vertices.iter().zip(&posed.skin).zip(&t.rotations) {
             out.positions.push(v.to_array());
             out.rotations
                 .push(normalize(quat_mul(quat_from_matrix(skin.matrix3), r)));
@@ -67,7 +76,7 @@ impl Rig {
         out.opacities.extend_from_slice(&t.opacities);
         out.features.extend_from_slice(&t.features);
 
-        triangle_frames(&posed.vertices, triangles, &mut self.frames);
+        triangle_frames(vertices, triangles, &mut self.frames);
         let uv = &avatar.uv;
         for (((&f, b), offset), (&r, s)) in uv
             .triangles
@@ -77,7 +86,7 @@ impl Rig {
             .zip(uv.local.rotations.iter().zip(&uv.local.scales))
         {
             let frame = self.frames[f as usize];
-            let [v0, v1, v2] = triangles[f as usize].map(|k| posed.vertices[k as usize]);
+            let [v0, v1, v2] = triangles[f as usize].map(|k| vertices[k as usize]);
             let anchor = b[0] * v0 + b[1] * v1 + b[2] * v2;
             let mu = frame.scale * (frame.rotation * Vec3::from(*offset)) + anchor;
             out.positions.push(mu.to_array());

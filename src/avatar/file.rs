@@ -1,10 +1,11 @@
 //! The avatar file (`.guava`): a JSON header line and the arrays as little-endian f32/u32, so a
 //! saved avatar loads back bit for bit. Written through a temporary file and renamed into place.
 //!
-//! Layout: `guava-rs avatar 1\n`, the header (one line of JSON), `\n`, then the template arrays
-//! (rotations 4, scales 3, opacities 1, features C per Gaussian) and the UV arrays (triangles
-//! u32, barycentrics 3, offsets 3, rotations 4, scales 3, opacities 1, features C), each array
-//! contiguous in that order.
+//! Layout: `guava-rs avatar 2\n`, the header (one line of JSON), `\n`, then the template arrays
+//! (rotations 4, scales 3, opacities 1, features C per Gaussian), the UV arrays (triangles
+//! u32, barycentrics 3, offsets 3, rotations 4, scales 3, opacities 1, features C) and, when the
+//! header says `displaced`, one displacement per body vertex; each array contiguous in that
+//! order. Version 2 added the source view and the displacements; version 1 files still read.
 
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -12,11 +13,18 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::{Avatar, AvatarKind, LocalGaussians, UvGaussians};
-use crate::gaussians::{MAX_CHANNELS, MIN_CHANNELS};
-use crate::tracking::EhmIdentityRecord;
+use glam::{Mat4, Vec3};
 
-pub const AVATAR_FORMAT: &str = "guava-rs avatar 1";
+use super::{Avatar, AvatarKind, LocalGaussians, UvGaussians};
+use crate::body::BodyPose;
+use crate::camera::Camera;
+use crate::gaussians::{MAX_CHANNELS, MIN_CHANNELS};
+use crate::photo::Crop;
+use crate::tracking::{EhmIdentityRecord, SourceView};
+
+pub const AVATAR_FORMAT: &str = "guava-rs avatar 2";
+/// Files before the source view and displacements.
+const AVATAR_FORMAT_1: &str = "guava-rs avatar 1";
 
 #[derive(Debug, thiserror::Error)]
 #[error("{file}: {problem}")]
@@ -37,8 +45,103 @@ struct Header {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     ehm_identity: Option<EhmIdentityRecord>,
     source: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    source_view: Option<ViewRecord>,
+    #[serde(default)]
+    displaced: bool,
     template_gaussians: usize,
     uv_gaussians: usize,
+}
+
+/// A [`SourceView`] as the header stores it: the pose in the bound body's joint and parameter
+/// order, the camera in full, the photo's square.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ViewRecord {
+    translation: [f32; 3],
+    rotations: Vec<[f32; 3]>,
+    coefficients: Vec<f32>,
+    /// World → camera, column-major.
+    view_from_world: [f32; 16],
+    size: [u32; 2],
+    focal: [f32; 2],
+    principal: [f32; 2],
+    near: f32,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    crop: Option<[i64; 3]>,
+}
+
+impl ViewRecord {
+    fn of(view: &SourceView) -> Self {
+        let c = &view.camera;
+        Self {
+            translation: view.pose.translation.to_array(),
+            rotations: view.pose.rotations.iter().map(|r| r.to_array()).collect(),
+            coefficients: view.pose.coefficients.clone(),
+            view_from_world: c.view_from_world.to_cols_array(),
+            size: [c.width, c.height],
+            focal: [c.fx, c.fy],
+            principal: [c.cx, c.cy],
+            near: c.near,
+            crop: view.crop.map(Crop::to_array),
+        }
+    }
+
+    fn view(self) -> Result<SourceView, String> {
+        let finite = self.translation.iter().all(|v| v.is_finite())
+            && self.rotations.iter().flatten().all(|v| v.is_finite())
+            && self.coefficients.iter().all(|v| v.is_finite())
+            && self.view_from_world.iter().all(|v| v.is_finite())
+            && self
+                .focal
+                .iter()
+                .chain(&self.principal)
+                .all(|v| v.is_finite());
+        if !finite {
+            return Err("source_view: a value is not finite".into());
+        }
+        if self.size.contains(&0) || self.focal.iter().any(|f| *f <= 0.0) {
+            return Err(format!(
+                "source_view: the camera's size {:?} and focal lengths {:?} must be positive",
+                self.size, self.focal
+            ));
+        }
+        let crop = match self.crop {
+            Some([left, top, side]) => {
+                let fits = |v: i64| i32::try_from(v).is_ok();
+                if !(fits(left) && fits(top) && (1..=i64::from(u32::MAX)).contains(&side)) {
+                    return Err(format!(
+                        "source_view.crop {:?} is out of range",
+                        [left, top, side]
+                    ));
+                }
+                Some(Crop {
+                    left: left as i32,
+                    top: top as i32,
+                    side: side as u32,
+                })
+            }
+            None => None,
+        };
+        Ok(SourceView {
+            pose: BodyPose {
+                translation: Vec3::from(self.translation),
+                rotations: self.rotations.into_iter().map(Vec3::from).collect(),
+                coefficients: self.coefficients,
+            },
+            camera: Camera {
+                view_from_world: Mat4::from_cols_array(&self.view_from_world),
+                width: self.size[0],
+                height: self.size[1],
+                fx: self.focal[0],
+                fy: self.focal[1],
+                cx: self.principal[0],
+                cy: self.principal[1],
+                near: self.near,
+            },
+            crop,
+        })
+    }
 }
 
 impl Avatar {
@@ -52,6 +155,8 @@ impl Avatar {
             identity: self.identity.clone(),
             ehm_identity: self.ehm_identity.clone(),
             source: self.source.clone(),
+            source_view: self.source_view.as_ref().map(ViewRecord::of),
+            displaced: !self.displacements.is_empty(),
             template_gaussians: self.template.len(),
             uv_gaussians: self.uv.local.len(),
         };
@@ -64,7 +169,8 @@ impl Avatar {
             write_words(out, uv.triangles.iter().copied())?;
             write_f32(out, uv.barycentrics.iter().flatten())?;
             write_f32(out, uv.offsets.iter().flatten())?;
-            write_local(out, &uv.local)
+            write_local(out, &uv.local)?;
+            write_f32(out, self.displacements.iter())
         })
         .map_err(|e| error(path, format!("cannot write: {e}")))
     }
@@ -81,13 +187,21 @@ impl Avatar {
             problem,
         };
         let mut lines = bytes.splitn(3, |&b| b == b'\n');
-        if lines.next() != Some(AVATAR_FORMAT.as_bytes()) {
+        let version = lines.next().unwrap_or_default();
+        if version != AVATAR_FORMAT.as_bytes() && version != AVATAR_FORMAT_1.as_bytes() {
             return Err(fail(format!(
-                "not an avatar file (the first line is not {AVATAR_FORMAT:?})"
+                "not an avatar file (the first line is not {AVATAR_FORMAT:?} or {AVATAR_FORMAT_1:?})"
             )));
         }
         let header: Header = serde_json::from_slice(lines.next().unwrap_or_default())
             .map_err(|e| fail(format!("header: {e}")))?;
+        if version == AVATAR_FORMAT_1.as_bytes()
+            && (header.displaced || header.source_view.is_some())
+        {
+            return Err(fail(
+                "header: a version 1 file has no source_view or displaced".into(),
+            ));
+        }
         let body = lines.next().unwrap_or_default();
         let c = header.channels;
         if !(MIN_CHANNELS..=MAX_CHANNELS).contains(&c) {
@@ -102,12 +216,24 @@ impl Avatar {
             )));
         }
         let (nt, nu) = (header.template_gaussians, header.uv_gaussians);
-        let words = nt * (8 + c) + nu * (1 + 3 + 3 + 8 + c);
-        if body.len() != 4 * words {
+        let nd = if header.displaced {
+            header.body_vertices
+        } else {
+            0
+        };
+        // Counted in u128: a hostile header's counts must not overflow into a small size.
+        let words =
+            nt as u128 * (8 + c as u128) + nu as u128 * (1 + 3 + 3 + 8 + c as u128) + nd as u128;
+        if body.len() as u128 != 4 * words {
             return Err(fail(format!(
-                "the arrays take {} bytes, expected {} for {nt} template and {nu} UV Gaussians with {c} channels",
+                "the arrays take {} bytes, expected {} for {nt} template and {nu} UV Gaussians with {c} channels{}",
                 body.len(),
-                4 * words
+                4 * words,
+                if nd > 0 {
+                    format!(" and {nd} displacements")
+                } else {
+                    String::new()
+                }
             )));
         }
         let mut reader = Words(body);
@@ -116,6 +242,12 @@ impl Avatar {
         let barycentrics = reader.arrays(nu);
         let offsets = reader.arrays(nu);
         let local = read_local(&mut reader, nu, c);
+        let displacements = reader.f32s(nd);
+        let source_view = header
+            .source_view
+            .map(ViewRecord::view)
+            .transpose()
+            .map_err(fail)?;
         let avatar = Avatar {
             kind: header.kind,
             body: header.body,
@@ -125,6 +257,8 @@ impl Avatar {
             identity: header.identity,
             ehm_identity: header.ehm_identity,
             source: header.source,
+            source_view,
+            displacements,
             template,
             uv: UvGaussians {
                 triangles,
@@ -191,7 +325,15 @@ impl Avatar {
             "uv barycentrics",
             &mut self.uv.barycentrics.iter().flatten().copied(),
         )?;
-        finite("uv offsets", &mut self.uv.offsets.iter().flatten().copied())
+        finite("uv offsets", &mut self.uv.offsets.iter().flatten().copied())?;
+        if !self.displacements.is_empty() && self.displacements.len() != self.body_vertices {
+            return Err(format!(
+                "{} displacements for a body of {} vertices (one per vertex)",
+                self.displacements.len(),
+                self.body_vertices
+            ));
+        }
+        finite("displacements", &mut self.displacements.iter().copied())
     }
 }
 

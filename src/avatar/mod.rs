@@ -11,10 +11,12 @@
 //! bit-identically.
 
 mod animate;
+mod dress;
 pub mod file;
 mod preview;
 
 pub use animate::{BodyMismatch, Rig, quat_from_matrix, quat_mul};
+pub use dress::Dressing;
 pub use file::{AVATAR_FORMAT, AvatarFileError};
 
 use std::collections::BTreeMap;
@@ -22,7 +24,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use crate::body::{BodyPose, EhmModel, Posable};
-use crate::tracking::EhmIdentityRecord;
+use crate::tracking::{EhmIdentityRecord, SourceView};
 
 /// Which pipeline made an avatar; shown to the user, never conflated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -75,6 +77,20 @@ pub struct UvGaussians {
     pub local: LocalGaussians,
 }
 
+impl UvGaussians {
+    /// Appends `other`'s Gaussians (same channel count).
+    pub fn append(&mut self, mut other: UvGaussians) {
+        self.triangles.append(&mut other.triangles);
+        self.barycentrics.append(&mut other.barycentrics);
+        self.offsets.append(&mut other.offsets);
+        let (a, b) = (&mut self.local, &mut other.local);
+        a.rotations.append(&mut b.rotations);
+        a.scales.append(&mut b.scales);
+        a.opacities.append(&mut b.opacities);
+        a.features.append(&mut b.features);
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Avatar {
     pub kind: AvatarKind,
@@ -90,6 +106,13 @@ pub struct Avatar {
     pub ehm_identity: Option<EhmIdentityRecord>,
     /// Where it came from (the photo's file name), shown to the user.
     pub source: String,
+    /// The view the photo was seen from (the body's pose, the camera, the photo's square), for
+    /// re-rendering the avatar as the photo shows it; `None` in files older than version 2.
+    pub source_view: Option<SourceView>,
+    /// Per body vertex, how far the surface the avatar wears (clothing) stands off the body
+    /// along its posed normal, in metres; empty when it wears none. Applied to the posed body
+    /// before the Gaussians are rigged ([`Dressing`]).
+    pub displacements: Vec<f32>,
     /// One per body vertex, in vertex order; rotations relative to the vertex's skinning rotation.
     pub template: LocalGaussians,
     pub uv: UvGaussians,

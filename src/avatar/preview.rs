@@ -62,6 +62,8 @@ impl Avatar {
             identity: self.identity.clone(),
             ehm_identity: self.ehm_identity.clone(),
             source: self.source.clone(),
+            source_view: self.source_view.clone(),
+            displacements: self.displacements.clone(),
             template: LocalGaussians::default(),
             uv: out,
         }
@@ -89,6 +91,8 @@ mod tests {
             identity: Default::default(),
             ehm_identity: None,
             source: "s".into(),
+            source_view: None,
+            displacements: Vec::new(),
             template: local(3, vec![0.0; 3]),
             uv: UvGaussians {
                 triangles: vec![1, 1, 1, 1],

@@ -53,6 +53,11 @@ pub trait Posable {
     fn ehm_identity(&self) -> Option<&super::EhmIdentity> {
         None
     }
+    /// For each vertex, the vertex it is welded to, where the mesh splits vertices at UV seams
+    /// (smooth normals are shared across them); `None` when it splits none.
+    fn weld(&self) -> Option<&[u32]> {
+        None
+    }
 }
 
 impl BodyPose {
@@ -230,5 +235,9 @@ impl Posable for BodyModel {
 
     fn is_identity_parameter(&self, i: usize) -> bool {
         self.targets[i].group == super::TargetGroup::Shape
+    }
+
+    fn weld(&self) -> Option<&[u32]> {
+        Some(&self.weld)
     }
 }

@@ -182,6 +182,8 @@ pub fn reconstruct_guava(
         identity: identity(body, &view.pose.coefficients),
         ehm_identity: Some(EhmIdentityRecord::of(&body.identity)),
         source: source_name.into(),
+        source_view: Some(view.clone()),
+        displacements: Vec::new(),
         template,
         uv: gaussians,
     };

@@ -4,6 +4,8 @@
 //! [0, 1] multiplied by the person mask (black background, as `data_loader.py` does), plus the
 //! mask itself; and [`bilinear_clamped`], the sampling every stage shares.
 
+pub mod distance;
+
 use std::path::Path;
 
 use image::{RgbaImage, imageops};
@@ -233,4 +235,31 @@ where
     let top = lerp(at(y0 * size + x0), at(y0 * size + x1), fx);
     let bottom = lerp(at(y1 * size + x0), at(y1 * size + x1), fx);
     lerp(top, bottom, fy)
+}
+
+/// A part of a person mask apart from its largest part is kept when it is at least this share of
+/// the largest (a hand or an arm seen apart from the body); smaller parts are stray pixels of the
+/// background the segmentation took for the person.
+pub const MIN_PART_SHARE: f32 = 0.02;
+
+/// Clears the parts of `mask` (`size`², values ≥ ½ being the person) smaller than
+/// [`MIN_PART_SHARE`] of its largest part; returns how many pixels were cleared.
+pub fn keep_person(mask: &mut [f32], size: usize) -> usize {
+    let inside: Vec<bool> = mask.iter().map(|&m| m >= 0.5).collect();
+    let (label, sizes) = distance::connected_parts(&inside, size);
+    let Some(&largest) = sizes.iter().max() else {
+        return 0;
+    };
+    let keep: Vec<bool> = sizes
+        .iter()
+        .map(|&n| n as f32 >= MIN_PART_SHARE * largest as f32)
+        .collect();
+    let mut cleared = 0;
+    for (m, &l) in mask.iter_mut().zip(&label) {
+        if l != u32::MAX && !keep[l as usize] {
+            *m = 0.0;
+            cleared += 1;
+        }
+    }
+    cleared
 }

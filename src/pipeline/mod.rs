@@ -327,7 +327,7 @@ impl Pipeline {
                 });
                 let mut image = read.image;
                 if let (None, Some(pose)) = (&image.mask, segmentation) {
-                    image.apply_mask(pose.mask_at(image.size as usize));
+                    image.apply_mask(person_mask(pose, image.size));
                 }
                 reconstruct_default(body, &uv, &view, image, &source_name, progress)?
             }
@@ -353,7 +353,7 @@ impl Pipeline {
                                   model, which did not load"
                             .into(),
                     })?;
-                    image.apply_mask(pose.mask_at(image.size as usize));
+                    image.apply_mask(person_mask(pose, image.size));
                 }
                 match ehm_identity.filter(|identity| *identity != body.identity) {
                     Some(identity) => {
@@ -412,10 +412,50 @@ impl Pipeline {
         }
     }
 
+    /// `photo` as `view` sees it, at [`SOURCE_SIZE`]: its square, masked by its alpha or else by
+    /// the pose model's person segmentation (what an avatar made from it is compared with).
+    pub fn masked_photo(
+        &mut self,
+        photo: Photo,
+        view: &SourceView,
+        progress: &mut dyn FnMut(Stage) -> bool,
+    ) -> Result<SourceImage, ReconstructError> {
+        let file = photo.name();
+        let (pixels, has_alpha) = photo.decode()?;
+        let square = Square::Tracked {
+            crop: view.crop,
+            points: false,
+        };
+        let models = if has_alpha {
+            None
+        } else {
+            Some(self.keypoints.load().map_err(|e| PhotoError {
+                file: file.clone(),
+                problem: format!(
+                    "has no alpha channel, and its person mask needs the pose model: {e}"
+                ),
+            })?)
+        };
+        let read = SourcePhoto::from_pixels(pixels, has_alpha, &file, square, models, progress)?;
+        let mut image = read.image;
+        if let (None, Some(d)) = (&image.mask, &read.detections) {
+            image.apply_mask(person_mask(&d.pose, image.size));
+        }
+        Ok(image)
+    }
+
     /// The keypoint models, loaded (for callers that run them without reconstructing).
     pub fn landmarkers(&mut self) -> Result<&mut Landmarkers, String> {
         self.keypoints.load()
     }
+}
+
+/// The pose model's person segmentation at `size`², without the stray parts it takes for the
+/// person ([`crate::photo::keep_person`]).
+fn person_mask(pose: &crate::keypoints::PoseKeypoints, size: u32) -> Vec<f32> {
+    let mut mask = pose.mask_at(size as usize);
+    crate::photo::keep_person(&mut mask, size as usize);
+    mask
 }
 
 /// A failed fit of the photo `file`.

@@ -51,6 +51,8 @@ pub struct Report {
     pub mirrored: usize,
     /// GUAVA mode: UV Gaussians dropped at opacity ≤ 0.001.
     pub pruned: usize,
+    /// Default mode: Gaussians made for the person's pixels the body does not cover.
+    pub extras: usize,
     /// GUAVA mode: where the networks' weights came from.
     pub networks: Option<String>,
     /// What went other than asked and how it was handled (models that did not load).
@@ -65,6 +67,7 @@ impl Report {
         self.observed = core.observed;
         self.mirrored = core.mirrored;
         self.pruned = core.pruned;
+        self.extras = core.extras;
     }
 
     pub fn total(&self) -> Duration {
@@ -93,8 +96,8 @@ impl Report {
                 self.observed, self.texels, self.pruned
             ),
             None => format!(
-                "{} of {} texels seen, {} mirrored, rest inpainted",
-                self.observed, self.texels, self.mirrored
+                "{} of {} texels seen, {} mirrored, rest inpainted; {} Gaussians beyond the body",
+                self.observed, self.texels, self.mirrored, self.extras
             ),
         });
         parts.extend(self.notes.iter().cloned());
@@ -134,8 +137,9 @@ impl Report {
                 self.texels, self.observed, self.pruned
             ),
             None => format!(
-                "texels: {} valid, {} seen by the camera, {} filled by symmetry, the rest inpainted",
-                self.texels, self.observed, self.mirrored
+                "texels: {} valid, {} seen by the camera, {} filled by symmetry, the rest inpainted; \
+                 {} Gaussians for the person's pixels beyond the body",
+                self.texels, self.observed, self.mirrored, self.extras
             ),
         });
         lines.push(format!("mask from {}", self.mask.describe()));

@@ -11,6 +11,8 @@
 //! plug in after the same inverse texture mapping in [`crate::guava_mode`].
 
 pub mod default_mode;
+pub mod displacement;
+pub mod extras;
 pub mod fill;
 pub mod texture;
 pub mod uv_map;
@@ -19,7 +21,7 @@ use std::collections::BTreeMap;
 use std::time::Duration;
 
 use crate::avatar::Avatar;
-use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, TargetGroup};
+use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, TargetGroup, triangle_frames};
 use crate::photo::{PhotoError, SourceImage};
 use crate::progress::{Cancelled, Stage, StageClock};
 use crate::raster;
@@ -68,6 +70,10 @@ pub struct Report {
     pub pruned: usize,
     /// GUAVA mode: triangles that win at least one pixel of the source view.
     pub visible_faces: usize,
+    /// Default mode: Gaussians made for person pixels the body does not cover.
+    pub extras: usize,
+    /// Default mode: the clothing layer's fit, when the photo had a person mask.
+    pub dressed: Option<displacement::DisplacementReport>,
 }
 
 /// The identity coefficients of `pose` (the shape targets it sets), stored with the avatar.
@@ -100,6 +106,20 @@ pub fn reconstruct_default(
     let mut posed = PosedBody::default();
     body.pose(&view.pose, &mut posed)?;
 
+    // The clothing layer, fitted to the person's silhouette where the photo has a mask; the
+    // Gaussians then ride the dressed surface, as they will when animated.
+    clock.start(Stage::Dress, progress)?;
+    let mut displacements = Vec::new();
+    if let Some(mask) = &photo.mask {
+        let (offsets, dressed) = displacement::fit_displacements(body, &posed, camera, mask);
+        let vertices = crate::avatar::Dressing::default()
+            .apply(&offsets, &posed.vertices, &body.triangles, Some(&body.weld))
+            .to_vec();
+        posed.vertices = vertices;
+        report.dressed = Some(dressed);
+        displacements = offsets;
+    }
+
     clock.start(Stage::Rasterize, progress)?;
     let fragments = raster::rasterize(&posed.vertices, &body.triangles, camera);
     if photo.mask.is_none() {
@@ -126,7 +146,7 @@ pub fn reconstruct_default(
         .count();
 
     clock.start(Stage::Gaussians, progress)?;
-    let avatar = default_mode::build(
+    let mut avatar = default_mode::build(
         body,
         &posed,
         uv,
@@ -135,6 +155,22 @@ pub fn reconstruct_default(
         identity_of(body, &view.pose),
         source_name.into(),
     );
+    avatar.source_view = Some(view.clone());
+    avatar.displacements = displacements;
+
+    clock.start(Stage::Extras, progress)?;
+    let mut frames = Vec::new();
+    triangle_frames(&posed.vertices, &body.triangles, &mut frames);
+    let extra = extras::extras(
+        &photo,
+        &fragments,
+        &posed.vertices,
+        &body.triangles,
+        &frames,
+        camera,
+    );
+    report.extras = extra.local.len();
+    avatar.uv.append(extra);
     report.timings = clock.finish();
     Ok((avatar, report))
 }

@@ -11,7 +11,7 @@ use super::layout::{PosedVertex, RigParams, TRIANGLE_FRAME_SIZE, TemplateGaussia
 use super::pipelines::{SplatPipelines, dispatch_1d};
 use super::scan::entry;
 use super::{SplatError, Splatter};
-use crate::avatar::{Avatar, BodyMismatch};
+use crate::avatar::{Avatar, BodyMismatch, Dressing};
 use crate::body::PosedBody;
 
 /// An avatar's constant data on the GPU, and its posed vertices.
@@ -25,6 +25,12 @@ pub struct GpuAvatar {
     /// Template then UV features, Gaussian-major: written into the splatter once per
     /// reallocation of its buffers (they live there, where the rasterizer reads them).
     features: Vec<f32>,
+    /// The clothing the avatar wears, applied to each pose on the CPU before it goes up, with the
+    /// mesh and weld its normals need.
+    displacements: Vec<f32>,
+    mesh: Vec<[u32; 3]>,
+    weld: Option<Vec<u32>>,
+    dressing: Dressing,
     params: wgpu::Buffer,
     template: wgpu::Buffer,
     uv: wgpu::Buffer,
@@ -60,12 +66,14 @@ fn constant(
 }
 
 impl GpuAvatar {
-    /// Uploads `avatar`, bound to a body whose mesh is `triangles`.
+    /// Uploads `avatar`, bound to a body whose mesh is `triangles`, welded at its UV seams by
+    /// `weld` ([`crate::body::Posable::weld`]).
     pub fn new(
         device: &wgpu::Device,
         pipes: Arc<SplatPipelines>,
         avatar: &Avatar,
         triangles: &[[u32; 3]],
+        weld: Option<&[u32]>,
     ) -> Self {
         let t = &avatar.template;
         let template: Vec<TemplateGaussian> = (0..t.len())
@@ -108,6 +116,16 @@ impl GpuAvatar {
                 avatar.body_triangles,
             ),
             features,
+            displacements: avatar.displacements.clone(),
+            mesh: if avatar.displacements.is_empty() {
+                Vec::new()
+            } else {
+                triangles.to_vec()
+            },
+            weld: weld
+                .filter(|_| !avatar.displacements.is_empty())
+                .map(<[u32]>::to_vec),
+            dressing: Dressing::default(),
             params: constant(
                 device,
                 "Rig::params",
@@ -193,7 +211,8 @@ impl GpuAvatar {
         self.bound = None;
     }
 
-    /// Uploads the posed body (its vertices and skinning rotations) for the next [`Self::encode`].
+    /// Uploads the posed body (its vertices, dressed in the avatar's clothing, and its skinning
+    /// rotations) for the next [`Self::encode`].
     pub fn set_pose(&mut self, queue: &wgpu::Queue, posed: &PosedBody) -> Result<(), BodyMismatch> {
         let (name, vertices, triangles) = &self.body;
         if posed.vertices.len() != *vertices || posed.skin.len() != *vertices {
@@ -205,9 +224,15 @@ impl GpuAvatar {
                 triangles: *triangles,
             });
         }
+        let vertices = self.dressing.apply(
+            &self.displacements,
+            &posed.vertices,
+            &self.mesh,
+            self.weld.as_deref(),
+        );
         self.scratch.clear();
         self.scratch
-            .extend(posed.vertices.iter().zip(&posed.skin).map(|(v, skin)| {
+            .extend(vertices.iter().zip(&posed.skin).map(|(v, skin)| {
                 let m = skin.matrix3;
                 PosedVertex {
                     position: v.extend(1.0).to_array(),

@@ -53,12 +53,14 @@ pub struct CloudRef {
     pub cloud: Arc<GaussianCloud>,
 }
 
-/// An avatar with its body's triangles, and the id it goes by: each id is uploaded once.
+/// An avatar with its body's triangles and seam weld, and the id it goes by: each id is
+/// uploaded once.
 #[derive(Clone)]
 pub struct AvatarRef {
     pub id: u64,
     pub avatar: Arc<Avatar>,
     pub triangles: Arc<Vec<[u32; 3]>>,
+    pub weld: Option<Arc<Vec<u32>>>,
 }
 
 /// A posed body and the id of that pose: each id is rigged once.
@@ -254,6 +256,7 @@ impl ViewRenderer {
                             self.pipelines.clone(),
                             &avatar.avatar,
                             &avatar.triangles,
+                            avatar.weld.as_deref().map(Vec::as_slice),
                         ),
                         preview: None,
                     });
@@ -267,7 +270,13 @@ impl ViewRenderer {
                 let gpu = match frame.preview {
                     true => shown.preview.get_or_insert_with(|| {
                         let preview = avatar.avatar.preview();
-                        GpuAvatar::new(device, self.pipelines.clone(), &preview, &avatar.triangles)
+                        GpuAvatar::new(
+                            device,
+                            self.pipelines.clone(),
+                            &preview,
+                            &avatar.triangles,
+                            avatar.weld.as_deref().map(Vec::as_slice),
+                        )
                     }),
                     false => &mut shown.full,
                 };

@@ -51,12 +51,13 @@ impl AvatarState {
         }
     }
 
-    /// The avatar for the viewport, bound to a body whose mesh is `triangles`.
-    pub fn reference(&self, triangles: Arc<Vec<[u32; 3]>>) -> AvatarRef {
+    /// The avatar for the viewport, bound to `body`'s mesh.
+    pub fn reference(&self, body: &BodyState) -> AvatarRef {
         AvatarRef {
             id: self.id,
             avatar: self.avatar.clone(),
-            triangles,
+            triangles: body.triangles(),
+            weld: body.weld(),
         }
     }
 }

@@ -51,14 +51,6 @@ impl ViewerBody {
         matches!(self, Self::Ehm(_))
     }
 
-    /// For each vertex, the vertex it is welded to (UV-seam splits share normals); EHM has none.
-    pub fn weld(&self) -> Vec<u32> {
-        match self {
-            Self::Template(m) => m.weld.clone(),
-            Self::Ehm(m) => (0..m.vertex_count() as u32).collect(),
-        }
-    }
-
     /// "N vertices, M joints" for the panel.
     pub fn size_label(&self) -> String {
         format!(
@@ -212,6 +204,13 @@ impl Posable for ViewerBody {
         match self {
             Self::Template(_) => None,
             Self::Ehm(m) => Some(&m.identity),
+        }
+    }
+
+    fn weld(&self) -> Option<&[u32]> {
+        match self {
+            Self::Template(m) => m.weld(),
+            Self::Ehm(m) => m.weld(),
         }
     }
 }

@@ -25,7 +25,7 @@ pub struct BodyState {
     selected_joint: usize,
     topology: u64,
     triangles: Arc<Vec<[u32; 3]>>,
-    weld: Vec<u32>,
+    weld: Option<Arc<Vec<u32>>>,
     sliders: Vec<SliderGroup>,
     /// The posed body, shared with the viewport callback without copying, and its pose's id.
     posed: Arc<PosedBody>,
@@ -42,7 +42,7 @@ impl BodyState {
         let selected_joint = model.joint_names().position(|n| n == "head").unwrap_or(0);
         Self {
             triangles: Arc::new(model.triangles().to_vec()),
-            weld: model.weld(),
+            weld: model.weld().map(|w| Arc::new(w.to_vec())),
             sliders: model.slider_groups(),
             model: Arc::new(model),
             label,
@@ -116,7 +116,7 @@ impl BodyState {
                 vertex_normals(
                     &self.posed.vertices,
                     &self.triangles,
-                    &self.weld,
+                    self.weld.as_deref().map(Vec::as_slice),
                     &mut self.normals_scratch,
                     &mut normals,
                 );
@@ -140,6 +140,11 @@ impl BodyState {
     /// The body's triangles, shared with the viewport.
     pub fn triangles(&self) -> Arc<Vec<[u32; 3]>> {
         self.triangles.clone()
+    }
+
+    /// The body's seam weld (`None`: it splits no vertices), shared with the viewport.
+    pub fn weld(&self) -> Option<Arc<Vec<u32>>> {
+        self.weld.clone()
     }
 
     pub fn ui(&mut self, ui: &mut egui::Ui) {

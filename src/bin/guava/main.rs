@@ -82,6 +82,10 @@ enum Command {
         /// Camera yaw around the body in degrees (positive: towards the body's left).
         #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
         yaw: f32,
+        /// Who is photographed: the bare body with a colour pattern (the default), or a subject
+        /// in a jacket, with hair, or both (skin, cloth and hair textures).
+        #[arg(long, value_enum, default_value_t = photo::SubjectName::Bare)]
+        subject: photo::SubjectName,
     },
     /// Reconstruct a photo into an avatar: the default reconstruction, or GUAVA mode with
     /// --guava-models and --ehm; the pose and camera from its tracking file, or fitted.
@@ -128,6 +132,27 @@ enum Command {
         #[arg(long)]
         ehm: Option<PathBuf>,
     },
+    /// How faithful an avatar is to its photo: the avatar re-rendered from the photo's camera
+    /// against the photo × person mask. Prints `iou=… psnr=… ssim=… l1=…` (silhouette IoU; PSNR,
+    /// SSIM and mean absolute error of RGB over the person's box).
+    Eval {
+        #[arg(long)]
+        avatar: PathBuf,
+        /// The photo it was made from.
+        #[arg(long)]
+        image: PathBuf,
+        /// The photo's tracking file, for avatars that do not carry their source view.
+        #[arg(long)]
+        tracking: Option<PathBuf>,
+        /// The EHM body (tools/convert_ehm.py) a GUAVA-mode avatar is bound to.
+        #[arg(long)]
+        ehm: Option<PathBuf>,
+        /// Also write the photo, the render and their difference side by side as PNG.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        #[command(flatten)]
+        keypoints: photo::KeypointArgs,
+    },
     /// Benchmarks (print a table).
     Bench {
         #[command(subcommand)]
@@ -148,6 +173,9 @@ enum Bench {
     /// A viewer frame of the default avatar, pose → pixels: the GPU-resident avatar against
     /// rigging on the CPU, and an interaction replay at each resolution the viewer uses.
     Frame(bench::FrameBenchArgs),
+    /// How much avatars look like their photos: synthetic subjects with known geometry from the
+    /// source view, turned views and a new pose, and the real photos in the repository.
+    Fidelity(bench::FidelityBenchArgs),
 }
 
 fn main() {
@@ -238,7 +266,7 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
-        Command::SynthPhoto { out, yaw } => photo::synth_photo(&out, yaw),
+        Command::SynthPhoto { out, yaw, subject } => photo::synth_photo(&out, yaw, subject),
         Command::Reconstruct {
             image,
             tracking,
@@ -258,6 +286,21 @@ fn run(cli: Cli) -> Result<()> {
             keypoints,
             ehm,
         } => photo::fit(&image, &out, overlay.as_deref(), &keypoints, ehm.as_deref()),
+        Command::Eval {
+            avatar,
+            image,
+            tracking,
+            ehm,
+            out,
+            keypoints,
+        } => photo::eval(
+            &avatar,
+            &image,
+            tracking.as_deref(),
+            ehm.as_deref(),
+            out.as_deref(),
+            &keypoints,
+        ),
         Command::Motion { file, out, ehm } => motion(&file, out.as_deref(), ehm.as_deref()),
         Command::Bench { which } => match which {
             Bench::Splat(args) => bench::splat(&args),
@@ -265,6 +308,7 @@ fn run(cli: Cli) -> Result<()> {
             Bench::Reconstruct(args) => bench::reconstruct(&args),
             Bench::Guava(args) => bench::guava(&args),
             Bench::Frame(args) => bench::frame(&args),
+            Bench::Fidelity(args) => bench::fidelity(&args),
         },
     }
 }
@@ -291,7 +335,7 @@ fn posed_avatar(
     let mut posed = PosedBody::default();
     body.pose(&pose, &mut posed)?;
     let mut cloud = guava::gaussians::GaussianCloud::new(avatar.channels);
-    guava::avatar::Rig::default().animate(avatar, &posed, body.triangles(), &mut cloud)?;
+    guava::avatar::Rig::default().animate(avatar, &posed, body, &mut cloud)?;
     Ok((cloud, camera))
 }
 

@@ -220,16 +220,100 @@ fn write_fit_overlay(
     guava::render::save_png(&canvas, path)
 }
 
-/// Writes a synthetic photo of the default body and its exact tracking beside it.
-pub fn synth_photo(out: &Path, yaw: f32) -> Result<()> {
-    use guava::synthetic;
+/// Compares an avatar, re-rendered from its photo's view, with the photo; prints the metrics on
+/// one line, and with `out` writes photo | render | difference as PNG.
+pub fn eval(
+    avatar: &Path,
+    image: &Path,
+    tracking: Option<&Path>,
+    ehm: Option<&Path>,
+    out: Option<&Path>,
+    keypoints: &KeypointArgs,
+) -> Result<()> {
+    let avatar_file = guava::avatar::Avatar::load(avatar)?;
+    match ehm {
+        Some(path) => {
+            let mut body = EhmModel::load(path)?;
+            avatar_file.apply_ehm_identity(&mut body);
+            eval_on(&avatar_file, &body, image, tracking, out, keypoints)
+        }
+        None => eval_on(
+            &avatar_file,
+            &BodyModel::default_body()?,
+            image,
+            tracking,
+            out,
+            keypoints,
+        ),
+    }
+    .with_context(|| avatar.display().to_string())
+}
+
+fn eval_on(
+    avatar: &guava::avatar::Avatar,
+    body: &impl guava::body::Posable,
+    image: &Path,
+    tracking: Option<&Path>,
+    out: Option<&Path>,
+    keypoints: &KeypointArgs,
+) -> Result<()> {
+    avatar.check_body(body).map_err(anyhow::Error::msg)?;
+    let view = match tracking {
+        Some(path) => {
+            let t = guava::tracking::Tracking::load(path)?;
+            SourceView::from_tracking(&t, body, &path.display().to_string())?
+        }
+        None => avatar
+            .source_view
+            .clone()
+            .ok_or(guava::eval::EvalError::NoSourceView)?,
+    };
+    let photo = keypoints
+        .pipeline()
+        .masked_photo(Photo::File(image), &view, &mut |_| true)?;
+    let mut renderer = guava::render::HeadlessRenderer::new(guava::gpu::GpuContext::headless()?);
+    let (metrics, rendered) =
+        guava::eval::evaluate(&mut renderer, avatar, body, Some(&view), &photo)?;
+    println!("{metrics}");
+    if let Some(path) = out {
+        guava::render::save_png(&guava::eval::side_by_side(&photo, &rendered), path)?;
+        println!("photo | render | difference → {}", path.display());
+    }
+    Ok(())
+}
+
+/// The synthetic subjects `guava synth-photo` draws.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum SubjectName {
+    Bare,
+    Clothed,
+    Haired,
+    ClothedAndHaired,
+}
+
+/// Writes a synthetic photo of the default body (bare with a colour pattern, or a subject with
+/// clothing or hair) and its exact tracking beside it.
+pub fn synth_photo(out: &Path, yaw: f32, subject: SubjectName) -> Result<()> {
+    use guava::synthetic::{self, Subject};
     let body = BodyModel::default_body()?;
     let view = SourceView {
         pose: BodyPose::rest(&body),
         camera: synthetic::upper_body_camera(&body, yaw.to_radians()),
         crop: None,
     };
-    let image = synthetic::photo(&body, &view.pose, &view.camera, synthetic::banded_texture)?;
+    let image = match subject {
+        SubjectName::Bare => {
+            synthetic::photo(&body, &view.pose, &view.camera, synthetic::banded_texture)?
+        }
+        other => {
+            let subject = match other {
+                SubjectName::Clothed => Subject::clothed(&body),
+                SubjectName::Haired => Subject::haired(&body),
+                _ => Subject::clothed_and_haired(&body),
+            };
+            subject.photo(&view.pose, &view.camera, synthetic::subject_texture)?
+        }
+    };
     guava::atomic_file::write_atomic(out, |w| {
         image
             .write_to(w, image::ImageFormat::Png)
@@ -240,11 +324,11 @@ pub fn synth_photo(out: &Path, yaw: f32) -> Result<()> {
     let name = out.file_name().unwrap_or_default().to_string_lossy();
     view.to_tracking(
         &body,
-        &format!("synthetic photo {name} (guava synth-photo)"),
+        &format!("synthetic photo {name} (guava synth-photo, {subject:?})"),
     )
     .save(&tracking_path)?;
     println!(
-        "wrote {} (synthetic: the default body with a colour pattern, yaw {yaw}°) and its tracking {}",
+        "wrote {} (synthetic: the default body, {subject:?}, yaw {yaw}°) and its tracking {}",
         out.display(),
         tracking_path.display()
     );

@@ -72,7 +72,7 @@ impl GuavaApp {
                 look: look(scene.cloud.channels),
             },
             (View::Avatar, _, Some(body), Some(avatar)) => Content::Avatar {
-                avatar: avatar.reference(body.triangles()),
+                avatar: avatar.reference(body),
                 pose: body.posed(),
                 look: look(avatar.avatar.channels),
             },

@@ -84,6 +84,7 @@ pub fn frame(args: &FrameBenchArgs) -> anyhow::Result<()> {
         renderer.pipelines.clone(),
         &avatar,
         &body.triangles,
+        Some(&body.weld),
     );
     let mut rows = Vec::new();
     for gpu in [false, true] {
@@ -98,7 +99,7 @@ pub fn frame(args: &FrameBenchArgs) -> anyhow::Result<()> {
                 // Waited for, so the rig pass is timed apart from the splatting.
                 guava::render::wait(&renderer.gpu.device);
             } else {
-                rig.animate(&avatar, &posed, &body.triangles, &mut cloud)?;
+                rig.animate(&avatar, &posed, &body, &mut cloud)?;
                 let gpu = &renderer.gpu;
                 renderer.splatter.upload(&gpu.device, &gpu.queue, &cloud)?;
             }
@@ -141,7 +142,10 @@ fn interaction(
         wgpu::TextureFormat::Rgba8UnormSrgb,
     );
     let mut report = ViewReport::default();
-    let triangles = Arc::new(body.triangles.clone());
+    let (triangles, weld) = (
+        Arc::new(body.triangles.clone()),
+        Arc::new(body.weld.clone()),
+    );
     let mut posed = PosedBody::default();
     pose_at(0, &mut posed)?;
     let (lo, hi) = posed
@@ -182,6 +186,7 @@ fn interaction(
                         id: 1,
                         avatar: avatar.clone(),
                         triangles: triangles.clone(),
+                        weld: Some(weld.clone()),
                     },
                     pose: PoseRef {
                         id: k as u64 + 1,

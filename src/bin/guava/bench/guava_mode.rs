@@ -118,7 +118,7 @@ pub fn guava(args: &GuavaBenchArgs) -> anyhow::Result<()> {
     for _ in 0..args.iterations * 4 {
         let t0 = Instant::now();
         body.pose(&view.pose, &mut posed)?;
-        rig.animate(&avatar, &posed, &body.triangles, &mut cloud)?;
+        rig.animate(&avatar, &posed, &body, &mut cloud)?;
         frame_ms.push(t0.elapsed().as_secs_f64() * 1e3);
     }
     println!(

@@ -1,12 +1,14 @@
 //! Benchmarks behind `guava bench …`: each prints a table of medians and the hardware it ran on.
 
 mod body;
+mod fidelity;
 mod frame;
 mod guava_mode;
 mod reconstruct;
 mod splat;
 
 pub use body::{BodyBenchArgs, body};
+pub use fidelity::{FidelityBenchArgs, fidelity};
 pub use frame::{FrameBenchArgs, frame};
 pub use guava_mode::{GuavaBenchArgs, guava};
 pub use reconstruct::{ReconstructBenchArgs, reconstruct};

@@ -96,7 +96,7 @@ pub fn reconstruct(args: &ReconstructBenchArgs) -> anyhow::Result<()> {
         avatar.apply_identity(&body, &mut pose);
         body.pose(&pose, &mut posed)?;
         let t1 = Instant::now();
-        rig.animate(&avatar, &posed, &body.triangles, &mut cloud)?;
+        rig.animate(&avatar, &posed, &body, &mut cloud)?;
         if i >= 5 {
             pose_ms.push(ms(t1 - t0));
             rig_ms.push(ms(t1.elapsed()));

@@ -1,0 +1,116 @@
+//! How faithful an avatar is to its photo: the avatar re-rendered through the frame path from the
+//! view its photo was seen from, compared with the photo × person mask ([`metrics`]): silhouette
+//! IoU, and PSNR, SSIM and L1 over the person's box.
+
+pub mod metrics;
+pub mod subjects;
+
+pub use metrics::Metrics;
+
+use crate::avatar::Avatar;
+use crate::body::{Posable, PosedBody};
+use crate::photo::SourceImage;
+use crate::render::{AvatarRenderError, GpuAvatar, HeadlessRenderer, SplatImage};
+use crate::tracking::SourceView;
+
+#[derive(Debug, thiserror::Error)]
+pub enum EvalError {
+    #[error("the photo's mask shows nobody: there is no person to compare with")]
+    NoPerson,
+    #[error(
+        "the avatar does not say which view its photo was seen from (it was saved before version \
+         2 of the file): give the photo's tracking file"
+    )]
+    NoSourceView,
+    #[error(transparent)]
+    Render(#[from] AvatarRenderError),
+    #[error(transparent)]
+    Pose(#[from] crate::body::PoseError),
+}
+
+/// `avatar` on `body` as `view` sees it, rendered through the frame path at the view's size on
+/// black: posed on the GPU exactly as the viewer poses it.
+pub fn render_view(
+    renderer: &mut HeadlessRenderer,
+    avatar: &Avatar,
+    body: &impl Posable,
+    view: &SourceView,
+) -> Result<SplatImage, EvalError> {
+    let mut posed = PosedBody::default();
+    body.pose(&view.pose, &mut posed)?;
+    let mut gpu = GpuAvatar::new(
+        &renderer.gpu.device,
+        renderer.pipelines.clone(),
+        avatar,
+        body.triangles(),
+        body.weld(),
+    );
+    let background = vec![0.0; avatar.channels];
+    Ok(renderer
+        .render_avatar(&mut gpu, &posed, &view.camera, &background)?
+        .0)
+}
+
+/// How `rendered` (RGB in its first three channels, and its alpha) compares with `photo` (RGB
+/// premultiplied by its mask, the same size).
+pub fn compare(rendered: &SplatImage, photo: &SourceImage) -> Result<Metrics, EvalError> {
+    let size = photo.size as usize;
+    assert_eq!(
+        (rendered.width as usize, rendered.height as usize),
+        (size, size),
+        "the render and the photo must be the same size"
+    );
+    let mask = photo.mask.as_deref().ok_or(EvalError::NoPerson)?;
+    let bounds = metrics::person_box(mask, size).ok_or(EvalError::NoPerson)?;
+    let rgb = interleaved_rgb(rendered);
+    Ok(metrics::compare(
+        &rgb,
+        &rendered.alpha,
+        &photo.rgb,
+        mask,
+        size,
+        bounds,
+    ))
+}
+
+/// A render's first three channels (or its one, grey) as interleaved RGB clamped to [0, 1], as
+/// the viewer shows them.
+pub fn interleaved_rgb(image: &SplatImage) -> Vec<f32> {
+    let plane = |c: usize| image.plane(c.min(image.channels - 1));
+    let (r, g, b) = (plane(0), plane(1), plane(2));
+    (0..r.len())
+        .flat_map(|i| [r[i], g[i], b[i]].map(|v| v.clamp(0.0, 1.0)))
+        .collect()
+}
+
+/// The photo, the render and their absolute difference (×4, so small errors show), side by
+/// side as one 8-bit image.
+pub fn side_by_side(photo: &SourceImage, rendered: &SplatImage) -> image::RgbImage {
+    let size = photo.size;
+    let rgb = interleaved_rgb(rendered);
+    let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+    image::RgbImage::from_fn(3 * size, size, |x, y| {
+        let i = 3 * (y * size + x % size) as usize;
+        let pixel = |k: usize| match x / size {
+            0 => photo.rgb[i + k],
+            1 => rgb[i + k],
+            _ => 4.0 * (rgb[i + k] - photo.rgb[i + k]).abs(),
+        };
+        image::Rgb([q(pixel(0)), q(pixel(1)), q(pixel(2))])
+    })
+}
+
+/// Renders `avatar` from its own source view (or `view` when given) and compares it with `photo`.
+pub fn evaluate(
+    renderer: &mut HeadlessRenderer,
+    avatar: &Avatar,
+    body: &impl Posable,
+    view: Option<&SourceView>,
+    photo: &SourceImage,
+) -> Result<(Metrics, SplatImage), EvalError> {
+    let view = view
+        .or(avatar.source_view.as_ref())
+        .ok_or(EvalError::NoSourceView)?;
+    let rendered = render_view(renderer, avatar, body, view)?;
+    Ok((compare(&rendered, photo)?, rendered))
+}

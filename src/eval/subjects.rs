@@ -1,0 +1,79 @@
+//! Fidelity with known answers: each synthetic subject ([`crate::synthetic::Subject`]) is
+//! photographed from the front, reconstructed from that photo with its exact view, and the avatar
+//! is compared with the subject itself drawn from the source view, from novel views (yaw ±30°
+//! and ±60°) and in a new pose (the demo motion's wave).
+
+use super::{EvalError, Metrics, compare, render_view};
+use crate::body::{BodyModel, BodyPose};
+use crate::photo::SourceImage;
+use crate::pipeline::{Mode, Photo, Pipeline, Tracked};
+use crate::render::HeadlessRenderer;
+use crate::synthetic::{Subject, subject_texture, upper_body_camera};
+use crate::tracking::{Retarget, SourceView, demo_motion};
+
+/// Where a subject is compared: its photo's view, turned views, a new pose.
+pub const VIEWS: [(&str, f32, bool); 6] = [
+    ("source", 0.0, false),
+    ("yaw −30°", -30.0, false),
+    ("yaw +30°", 30.0, false),
+    ("yaw −60°", -60.0, false),
+    ("yaw +60°", 60.0, false),
+    ("new pose (wave)", 0.0, true),
+];
+
+/// What went wrong with a subject: reconstructing it, or comparing.
+#[derive(Debug, thiserror::Error)]
+pub enum SubjectError {
+    #[error(transparent)]
+    Reconstruct(#[from] crate::reconstruct::ReconstructError),
+    #[error(transparent)]
+    Eval(#[from] EvalError),
+    #[error(transparent)]
+    Pose(#[from] crate::body::PoseError),
+    #[error(transparent)]
+    Tracking(#[from] crate::tracking::TrackingError),
+}
+
+/// `subject` photographed from the front at rest, reconstructed by `pipeline` (default mode, the
+/// exact view given), then compared at every [`VIEWS`] entry: one row of metrics each.
+pub fn score(
+    renderer: &mut HeadlessRenderer,
+    pipeline: &mut Pipeline,
+    subject: &Subject,
+) -> Result<Vec<Metrics>, SubjectError> {
+    let body: &BodyModel = subject.body;
+    let rest = BodyPose::rest(body);
+    let view = SourceView {
+        pose: rest.clone(),
+        camera: upper_body_camera(body, 0.0),
+        crop: None,
+    };
+    let photo = subject.photo(&view.pose, &view.camera, subject_texture)?;
+    let outcome = pipeline.reconstruct(
+        Mode::Default(body),
+        Photo::Pixels {
+            name: subject.name,
+            pixels: photo,
+            has_alpha: true,
+        },
+        Tracked::Given(view),
+        &mut |_| true,
+    )?;
+    let motion = demo_motion()?;
+    let mut wave = rest.clone();
+    Retarget::new(&motion, body).sample(&motion, 6.45, &mut wave);
+    let mut rows = Vec::new();
+    for (_, yaw, new_pose) in VIEWS {
+        let at = SourceView {
+            pose: if new_pose { wave.clone() } else { rest.clone() },
+            camera: upper_body_camera(body, yaw.to_radians()),
+            crop: None,
+        };
+        let truth = subject.photo(&at.pose, &at.camera, subject_texture)?;
+        let truth = SourceImage::from_rgba(&truth, true, subject.name)
+            .map_err(crate::reconstruct::ReconstructError::from)?;
+        let rendered = render_view(renderer, &outcome.avatar, body, &at)?;
+        rows.push(compare(&rendered, &truth)?);
+    }
+    Ok(rows)
+}
