@@ -13,6 +13,8 @@ pub enum Stage {
     Keypoints,
     /// The body's pose, shape, expression and camera fitted to the keypoints.
     Fit,
+    /// The fitted body's outline fitted to the person mask.
+    Silhouette,
     /// GUAVA mode: DINOv2 and its feature head on the photo.
     Encode,
     Pose,
@@ -47,6 +49,7 @@ impl Stage {
             Stage::LoadModels => "loading the keypoint models",
             Stage::Keypoints => "keypoints and person mask",
             Stage::Fit => "fit pose, shape and camera",
+            Stage::Silhouette => "fit the outline to the mask",
             Stage::Encode => "encoder (DINOv2, feature maps)",
             Stage::DecodeVertices => "template-Gaussian decoder",
             Stage::DecodeUv => "UV decoder (StyleUNet)",

@@ -409,6 +409,7 @@ fn animation_matches_the_reference_ubody_gaussian() {
                 features: floats("uv_features"),
             },
         },
+        outside: 0,
     };
     let (cases, _) = npz.indices("cases", &[None], 0..3).expect("cases");
     let mut posed = PosedBody::default();

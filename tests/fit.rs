@@ -222,7 +222,10 @@ fn the_demo_portrait_fits_and_reconstructs() {
         "{} keypoints, {:.1} px RMS; {} of {} texels seen",
         fit.keypoints_used, fit.rms_px, report.observed, report.texels
     );
-    assert!(fit.keypoints_used >= 9 && fit.rms_px < 8.0, "{fit:?}");
+    // MediaPipe puts her shoulders on the suit's neck ring and her hips on its chest, which an
+    // upright body of one shape cannot meet: 11.7 px measured (4.7 px when the fit was free to
+    // lay the torso back, which it did, 65°).
+    assert!(fit.keypoints_used >= 9 && fit.rms_px < 14.0, "{fit:?}");
     // Her face: all 103 points used, explained to a few pixels of a 63 px eye span (2.3 px
     // measured), and what anyone sees in the photo: a broad smile, both eyes open.
     let face = fit.face.as_ref().expect("the face stage ran");
@@ -266,8 +269,12 @@ fn the_demo_portrait_fits_and_reconstructs() {
             "{side:?} eye: turned {:.1}°, {off:.1}° off the camera",
             turn.to_degrees()
         );
-        // Measured 3.6° and 4.2°, after turns of 12° and 9° from the head's straight ahead.
-        assert!(off < 8.0, "{side:?} eye looks {off}° away from the camera");
+        // Measured 12.2° and 10.1°, after turns of 12° and 10° from the head's straight ahead:
+        // both eyes turn down from a head that faces 7° below the camera. The face points leave
+        // the head's pitch loose (3.6° and 4.2° off when the fit laid the torso 65° back and the
+        // head tipped up with it), so this bounds a gaze that looks at the camera, give or take
+        // that pitch, and not one turned away (a mirrored or sideways turn is 20° and more).
+        assert!(off < 15.0, "{side:?} eye looks {off}° away from the camera");
     }
     assert_eq!(report.mask, MaskSource::Segmentation);
     assert!(report.observed > 20_000, "{report:?}");
@@ -297,13 +304,10 @@ fn the_demo_portrait_fits_and_reconstructs() {
             .collect();
         (used.iter().sum::<f32>() / used.len() as f32).sqrt()
     };
+    // (After the silhouette stage, which moves the body to the mask's outline, so these are not
+    // the keypoint stage's RMS.)
     let (fitted_rms, shipped_rms) = (keypoint_rms(&view), keypoint_rms(&shipped));
     println!("body keypoints: fitted {fitted_rms:.2} px RMS, shipped tracking {shipped_rms:.2} px");
-    assert!(
-        (fitted_rms - fit.rms_px).abs() < 0.05,
-        "{fitted_rms} vs the fit's {}",
-        fit.rms_px
-    );
     assert!(
         shipped_rms < fitted_rms + 0.5,
         "the shipped tracking is {shipped_rms} px RMS, the fit {fitted_rms}"

@@ -354,8 +354,10 @@ fn the_fit_reads_dwposes_points_as_given() {
         depth * 100.0
     );
     assert_eq!(t.keypoints_used, r.keypoints_used);
-    // The pipeline's points are the given ones to within half a bin (0.56 px, ~1 mm here).
-    assert!(worst < 0.005, "{worst} m");
+    // The pipeline's points are the given ones to within half a bin (0.56 px, ~1 mm here); the
+    // fit of these points (MediaPipe's shoulders on the suit's neck ring, 12–16 px RMS) is
+    // loose enough that this moves it by 1.8 cm. Swapping the two shoulders moves it 15 cm.
+    assert!(worst < 0.03, "{worst} m");
     assert!(depth < 0.01, "{depth}");
     // Facing the camera (GUAVA's looks along +z): the nose nearer than both ears, the subject's
     // left on the image's right.

@@ -32,7 +32,7 @@ pub struct Rig {
 
 impl Rig {
     /// The avatar's Gaussians on `body` posed as `posed` (dressed in the avatar's clothing
-    /// first), into `out`.
+    /// first), into `out`; not those on parts its photo did not show ([`Avatar::outside`]).
     pub fn animate(
         &mut self,
         avatar: &Avatar,
@@ -78,12 +78,14 @@ impl Rig {
 
         triangle_frames(vertices, triangles, &mut self.frames);
         let uv = &avatar.uv;
+        let shown = avatar.shown_uv(false);
         for (((&f, b), offset), (&r, s)) in uv
             .triangles
             .iter()
             .zip(&uv.barycentrics)
             .zip(&uv.offsets)
             .zip(uv.local.rotations.iter().zip(&uv.local.scales))
+            .take(shown)
         {
             let frame = self.frames[f as usize];
             let [v0, v1, v2] = triangles[f as usize].map(|k| vertices[k as usize]);
@@ -94,8 +96,10 @@ impl Rig {
                 .push(quat_mul(quat_from_matrix(Mat3A::from(frame.rotation)), r));
             out.scales.push(s.map(|x| x * frame.scale));
         }
-        out.opacities.extend_from_slice(&uv.local.opacities);
-        out.features.extend_from_slice(&uv.local.features);
+        out.opacities
+            .extend_from_slice(&uv.local.opacities[..shown]);
+        out.features
+            .extend_from_slice(&uv.local.features[..shown * avatar.channels]);
         Ok(())
     }
 }

@@ -49,6 +49,9 @@ struct Header {
     source_view: Option<ViewRecord>,
     #[serde(default)]
     displaced: bool,
+    /// The last UV Gaussians on parts the photo did not show (version 2).
+    #[serde(default)]
+    outside: usize,
     template_gaussians: usize,
     uv_gaussians: usize,
 }
@@ -157,6 +160,7 @@ impl Avatar {
             source: self.source.clone(),
             source_view: self.source_view.as_ref().map(ViewRecord::of),
             displaced: !self.displacements.is_empty(),
+            outside: self.outside,
             template_gaussians: self.template.len(),
             uv_gaussians: self.uv.local.len(),
         };
@@ -266,6 +270,7 @@ impl Avatar {
                 offsets,
                 local,
             },
+            outside: header.outside,
         };
         avatar.validate().map_err(fail)?;
         Ok(avatar)
@@ -273,6 +278,13 @@ impl Avatar {
 
     /// Checks what animation and splatting rely on; the problem names the array and index.
     pub fn validate(&self) -> Result<(), String> {
+        if self.outside > self.uv.local.len() {
+            return Err(format!(
+                "outside is {}, but there are {} UV Gaussians",
+                self.outside,
+                self.uv.local.len()
+            ));
+        }
         if let Some((name, value)) = self.identity.iter().find(|(_, v)| !v.is_finite()) {
             return Err(format!("identity {name:?} is {value}"));
         }

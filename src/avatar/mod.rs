@@ -116,6 +116,10 @@ pub struct Avatar {
     /// One per body vertex, in vertex order; rotations relative to the vertex's skinning rotation.
     pub template: LocalGaussians,
     pub uv: UvGaussians,
+    /// How many of the last UV Gaussians lie on body parts the photo did not show (below an
+    /// upper-body portrait's edge): neutral grey, and drawn only when asked
+    /// ([`Avatar::shown_uv`]), so the avatar is an upper-body avatar as GUAVA's is.
+    pub outside: usize,
 }
 
 impl Avatar {
@@ -166,6 +170,15 @@ impl Avatar {
 
     pub fn len(&self) -> usize {
         self.template.len() + self.uv.local.len()
+    }
+
+    /// The UV Gaussians drawn: all of them with `outside`, else those on what the photo showed.
+    pub fn shown_uv(&self, outside: bool) -> usize {
+        if outside {
+            self.uv.local.len()
+        } else {
+            self.uv.local.len() - self.outside
+        }
     }
 
     pub fn is_empty(&self) -> bool {

@@ -16,8 +16,17 @@ impl Avatar {
         for (i, &t) in uv.triangles.iter().enumerate() {
             by_triangle[t as usize].push(i);
         }
+        // Triangles the photo showed first, then those it did not (they stay the trailing block).
+        let first_outside = self.shown_uv(false);
+        let outside = |members: &[usize]| members.first().is_some_and(|&i| i >= first_outside);
+        let order = (0..self.body_triangles)
+            .filter(|&t| !outside(&by_triangle[t]))
+            .chain((0..self.body_triangles).filter(|&t| outside(&by_triangle[t])));
         let mut out = UvGaussians::default();
-        for (t, members) in by_triangle.iter().enumerate() {
+        let mut outside_count = 0;
+        for t in order {
+            let members = &by_triangle[t];
+            outside_count += usize::from(outside(members));
             let Some(&first) = members.first() else {
                 continue;
             };
@@ -66,6 +75,7 @@ impl Avatar {
             displacements: self.displacements.clone(),
             template: LocalGaussians::default(),
             uv: out,
+            outside: outside_count,
         }
     }
 }
@@ -105,6 +115,7 @@ mod tests {
                 offsets: vec![[0.0; 3]; 4],
                 local: local(4, vec![0.0, 1.0, 2.0, 3.0]),
             },
+            outside: 0,
         };
         let p = avatar.preview();
         assert!(p.template.is_empty());

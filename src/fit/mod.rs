@@ -26,15 +26,19 @@ mod hand;
 mod lm;
 mod problem;
 mod report;
+mod silhouette;
 mod unknowns;
 
 pub use face::{FACE_FEATURES, FACE_FIT_POINTS, FaceEmbedding, embed_face};
 pub use gaze::{eye_joint, pupil};
 pub use hand::{BodyPoint, hand_targets};
 pub use report::{FaceFitReport, FitReport, GazeFitReport, HandFitReport};
+pub use silhouette::{SilhouetteReport, fit_silhouette};
 
 use problem::{Stage, State, Target, Unknown, camera_for};
-use unknowns::{face_joints, face_shapes, fitted_expressions, relaxed_pose};
+use unknowns::{
+    face_joints, face_shapes, fitted_expressions, joint_unknowns, relaxed_pose, root_and_camera,
+};
 
 use glam::{Vec2, Vec3};
 
@@ -46,8 +50,10 @@ use crate::keypoints::{
 use crate::tracking::SourceView;
 
 /// The joints the body stage turns (besides the root).
-pub const FITTED_JOINTS: [&str; 11] = [
+pub const FITTED_JOINTS: [&str; 13] = [
     "spine03",
+    "clavicle.L",
+    "clavicle.R",
     "neck01",
     "head",
     "upperarm01.L",
@@ -109,8 +115,6 @@ pub const SHAPE_PRIOR_PX: f64 = 20.0;
 /// face's outer-eye-corner distance (so it does not depend on how many pixels the face covers).
 /// Weak, because a unit moves a dozen points at once; it keeps units no point sees at neutral.
 pub const EXPRESSION_PRIOR_PER_EYE_SPAN: f64 = 0.03;
-/// The global orientation's prior is weaker: people face the camera at any angle.
-const ROOT_PRIOR_PX_PER_RAD: f64 = 2.0;
 /// Below this pose presence the pose model sees no person (MediaPipe's tracking threshold), and
 /// its landmarks, confident-looking or not, are not fitted.
 pub const MIN_PRESENCE: f32 = 0.5;
@@ -126,6 +130,13 @@ const FACE_POINT_WEIGHT: f64 = 0.5;
 /// outer-eye-corner distance: weak beside what the iris shows (an eyeball's radius is about an
 /// eighth of that distance per radian), so the gaze follows the iris.
 const GAZE_PRIOR_PER_EYE_SPAN: f64 = 0.02;
+/// The hips count at this weight. In an upper-body photo they are below the frame or at its
+/// edge, where the pose model guesses, and confidently: on the demo portrait MediaPipe put them on
+/// the chest, and on the drawn body (hips in view) 85–90 px above the body's COCO hips, more than
+/// half the way up to the shoulders. At full weight they were the reason the fit leaned the
+/// torso back (a shorter torso in the picture); at ¼ the drawn body's joints come within 7.9 px
+/// mean of the truth (tests/fit.rs) and the cameraman's legs still hang from where his hips are.
+const HIP_WEIGHT: f64 = 0.25;
 const ITERATIONS: usize = 30;
 /// Starting depths of the body stage, as factors of the shoulder-width estimate.
 const BODY_START_DEPTHS: [f32; 3] = [0.85, 1.0, 1.2];
@@ -241,7 +252,16 @@ pub fn fit_keypoints(
     let mut surface = Vec::new();
     for k in keypoints.iter().filter(|k| k.confidence >= MIN_CONFIDENCE) {
         let l = landmark(k.name).ok_or_else(|| FitError::MissingOnBody(k.name.into()))?;
-        observations.push((Target::Point(l), k.pixel, (k.confidence as f64).sqrt()));
+        let weight = if k.name.ends_with("_hip") {
+            HIP_WEIGHT
+        } else {
+            1.0
+        };
+        observations.push((
+            Target::Point(l),
+            k.pixel,
+            weight * (k.confidence as f64).sqrt(),
+        ));
         names.push(k.name);
         surface.push(body.landmarks[l].clone());
     }
@@ -273,7 +293,10 @@ pub fn fit_keypoints(
     let focal = GUAVA_INVTANFOV * side as f32 / 2.0;
     let depth = focal * w3 / w2.max(1.0);
     let centre = side as f32 / 2.0;
-    let relaxed = relaxed_pose(body);
+    // An arm whose elbow and wrist the models did not see rests along the body.
+    let unseen_arms = ["left", "right"]
+        .map(|side| !has(&format!("{side}_elbow")) && !has(&format!("{side}_wrist")));
+    let relaxed = relaxed_pose(body, unseen_arms);
     let start_at = |depth: f32| State {
         feature_offsets: [Vec2::ZERO; FACE_FEATURES.len()],
         pose: relaxed.clone(),
@@ -320,13 +343,22 @@ pub fn fit_keypoints(
             .chain(&pupils),
     );
 
-    let mut unknowns: Vec<(Unknown, f64)> = (0..3)
-        .map(|k| (Unknown::Joint(0, k), ROOT_PRIOR_PX_PER_RAD))
-        .chain((0..3).map(|k| (Unknown::Camera(k), 0.0)))
-        .collect();
+    let mut unknowns: Vec<(Unknown, f64)> = root_and_camera().collect();
     for name in FITTED_JOINTS {
+        // A leg turns only where the keypoint at its far end was seen: otherwise the hip points
+        // alone (skinned to the thighs) lifted the demo portrait's thigh 57° toward the camera.
+        let far_end = match name {
+            "upperleg01.L" => Some("left_knee"),
+            "upperleg01.R" => Some("right_knee"),
+            "lowerleg01.L" => Some("left_ankle"),
+            "lowerleg01.R" => Some("right_ankle"),
+            _ => None,
+        };
+        if far_end.is_some_and(|k| !has(k)) {
+            continue;
+        }
         let j = joint(name)?;
-        unknowns.extend((0..3).map(|k| (Unknown::Joint(j, k), PRIOR_PX_PER_RAD)));
+        unknowns.extend(joint_unknowns(body, j));
     }
     unknowns.extend(
         body.targets_in(TargetGroup::Shape)
@@ -381,7 +413,7 @@ pub fn fit_keypoints(
         );
         let mut unknowns = Vec::new();
         for j in face_joints(body)? {
-            unknowns.extend((0..3).map(|k| (Unknown::Joint(j, k), PRIOR_PX_PER_RAD)));
+            unknowns.extend(joint_unknowns(body, j));
         }
         let eye_span =
             landmarks.points[FACE_EYE_CORNERS.0].distance(landmarks.points[FACE_EYE_CORNERS.1]);
@@ -541,6 +573,11 @@ pub fn fit_keypoints(
         surface,
         face: face_report,
         face_skipped: None,
+        unseen_arms: ["left", "right"]
+            .into_iter()
+            .zip(unseen_arms)
+            .filter_map(|(side, unseen)| unseen.then_some(side))
+            .collect(),
         hands: hands_report,
         gaze: gaze_report,
     };

@@ -26,8 +26,11 @@ pub struct FitReport {
     pub face_skipped: Option<String>,
     /// The hand stage, when the hand model found a hand.
     pub hands: Option<HandFitReport>,
+    /// The arms whose elbow and wrist the keypoint models did not see ("left", "right": the
+    /// person's): they rest along the body.
+    pub unseen_arms: Vec<&'static str>,
     /// The gaze stage, when the face stage ran, the iris model found irises and the body has
-    /// eye joints and eyeballs with an iris part ([`pupil`]).
+    /// eye joints and eyeballs with an iris part ([`super::pupil`]).
     pub gaze: Option<GazeFitReport>,
 }
 

@@ -24,7 +24,7 @@ use image::RgbaImage;
 
 use crate::avatar::Avatar;
 use crate::body::{BodyModel, EhmIdentity, EhmModel, Posable};
-use crate::fit::{FitError, fit_detections, fit_ehm_detections};
+use crate::fit::{FitError, fit_detections, fit_ehm_detections, fit_silhouette};
 use crate::guava_mode::{GuavaModels, reconstruct_guava, uv_map};
 use crate::keypoints::Landmarkers;
 use crate::photo::{PhotoError, SOURCE_SIZE, SourceImage};
@@ -271,6 +271,20 @@ impl Pipeline {
                 }
                 .map_err(|e| fit_error(&file, e))?;
                 view.crop = read.crop;
+                // The default body's outline to the person mask (GUAVA's networks learned their
+                // own offsets from EHM-Tracker's fits, which use no silhouette).
+                let mask = match (&read.image.mask, &read.detections) {
+                    (Some(alpha), _) => Some(alpha.clone()),
+                    (None, Some(d)) => Some(person_mask(&d.pose, read.image.size)),
+                    (None, None) => None,
+                };
+                if let (FitBody::Template(b), Some(mask)) = (body, mask) {
+                    clock.start(Stage::Silhouette, progress)?;
+                    let (fitted, silhouette) =
+                        fit_silhouette(b, &view, &fit, &mask, read.image.size);
+                    view = fitted;
+                    report.silhouette = Some(silhouette);
+                }
                 report.fit = Some(fit);
                 view
             }

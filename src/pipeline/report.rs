@@ -44,6 +44,8 @@ pub struct Report {
     pub body_points: Option<&'static str>,
     /// How the pose and camera were fitted, when they were.
     pub fit: Option<FitReport>,
+    /// How the fitted body's outline was fitted to the person mask, when it was.
+    pub silhouette: Option<crate::fit::SilhouetteReport>,
     /// Valid texels of the UV map, and those the source camera saw.
     pub texels: usize,
     pub observed: usize,
@@ -53,6 +55,8 @@ pub struct Report {
     pub pruned: usize,
     /// Default mode: Gaussians made for the person's pixels the body does not cover.
     pub extras: usize,
+    /// Default mode: UV Gaussians on parts the photo did not show, left out (grey on request).
+    pub left_out: usize,
     /// GUAVA mode: where the networks' weights came from.
     pub networks: Option<String>,
     /// What went other than asked and how it was handled (models that did not load).
@@ -68,6 +72,7 @@ impl Report {
         self.mirrored = core.mirrored;
         self.pruned = core.pruned;
         self.extras = core.extras;
+        self.left_out = core.left_out;
     }
 
     pub fn total(&self) -> Duration {
@@ -90,14 +95,21 @@ impl Report {
         if let Some(f) = &self.fit {
             parts.push(self.fit_summary(f));
         }
+        if let Some(s) = &self.silhouette {
+            parts.push(format!(
+                "outline to the mask: IoU {:.2} to {:.2}",
+                s.iou_before, s.iou_after
+            ));
+        }
         parts.push(match self.networks {
             Some(_) => format!(
                 "{} of {} texels on faces the photo shows, {} Gaussians pruned",
                 self.observed, self.texels, self.pruned
             ),
             None => format!(
-                "{} of {} texels seen, {} mirrored, rest inpainted; {} Gaussians beyond the body",
-                self.observed, self.texels, self.mirrored, self.extras
+                "{} of {} texels seen, {} mirrored, rest inpainted; {} Gaussians beyond the body; \
+                 {} on parts the photo did not show left out",
+                self.observed, self.texels, self.mirrored, self.extras, self.left_out
             ),
         });
         parts.extend(self.notes.iter().cloned());
@@ -124,6 +136,9 @@ impl Report {
         if let Some(g) = &f.gaze {
             s.push_str(&format!(", gaze to {} irises", g.observed.len()));
         }
+        for side in &f.unseen_arms {
+            s.push_str(&format!(", {side} arm unseen (rests along the body)"));
+        }
         s
     }
 
@@ -131,6 +146,12 @@ impl Report {
     /// stage's time and the total.
     pub fn lines(&self) -> Vec<String> {
         let mut lines = self.fit.as_ref().map(fit_lines).unwrap_or_default();
+        if let Some(s) = &self.silhouette {
+            lines.push(format!(
+                "outline to the person mask: IoU {:.3} → {:.3}, outlines {:.1} → {:.1} px apart",
+                s.iou_before, s.iou_after, s.before_px, s.after_px
+            ));
+        }
         lines.push(match self.networks {
             Some(_) => format!(
                 "texels: {} valid, {} on faces the photo shows; {} Gaussians pruned",
@@ -138,8 +159,9 @@ impl Report {
             ),
             None => format!(
                 "texels: {} valid, {} seen by the camera, {} filled by symmetry, the rest inpainted; \
-                 {} Gaussians for the person's pixels beyond the body",
-                self.texels, self.observed, self.mirrored, self.extras
+                 {} Gaussians for the person's pixels beyond the body; {} on parts the photo did \
+                 not show left out",
+                self.texels, self.observed, self.mirrored, self.extras, self.left_out
             ),
         });
         lines.push(format!("mask from {}", self.mask.describe()));
@@ -187,6 +209,12 @@ pub fn fit_lines(f: &FitReport) -> Vec<String> {
         ),
         None => "hands: none found".into(),
     });
+    if !f.unseen_arms.is_empty() {
+        lines.push(format!(
+            "unseen, resting along the body: the {} arm",
+            f.unseen_arms.join(" and the ")
+        ));
+    }
     if let Some(g) = &f.gaze {
         let turns: Vec<String> = g
             .turn_rad

@@ -162,6 +162,7 @@ pub fn build(
         displacements: Vec::new(),
         template,
         uv: out,
+        outside: 0,
     }
 }
 

@@ -72,6 +72,8 @@ pub struct Report {
     pub visible_faces: usize,
     /// Default mode: Gaussians made for person pixels the body does not cover.
     pub extras: usize,
+    /// Default mode: UV Gaussians on parts the photo did not show (greyed, drawn on request).
+    pub left_out: usize,
     /// Default mode: the clothing layer's fit, when the photo had a person mask.
     pub dressed: Option<displacement::DisplacementReport>,
 }
@@ -171,6 +173,76 @@ pub fn reconstruct_default(
     );
     report.extras = extra.local.len();
     avatar.uv.append(extra);
+    report.left_out = leave_out(&mut avatar, &posed.vertices, &body.triangles, camera);
     report.timings = clock.finish();
     Ok((avatar, report))
+}
+
+/// The body just past the photo's edge is kept (turned views see a little of it, coloured from
+/// what the photo shows next to it): this share of the photo's side beyond each edge.
+pub const LEAVE_OUT_MARGIN: f32 = 0.25;
+
+/// The grey that parts of the body the photo did not show are drawn in, when they are.
+pub const NEUTRAL_FILL: f32 = 0.5;
+
+/// Leaves out of `avatar` what its photo did not show: the UV Gaussians on triangles none of
+/// whose corners (posed at `vertices`) `camera` sees inside the photo or within
+/// [`LEAVE_OUT_MARGIN`] of its edge move, greyed, to the end of the UV set (the avatar's
+/// `outside` block, drawn only on request), and the template Gaussians on such vertices go
+/// transparent. Returns how many UV Gaussians were left out.
+fn leave_out(
+    avatar: &mut Avatar,
+    vertices: &[glam::Vec3],
+    triangles: &[[u32; 3]],
+    camera: &crate::camera::Camera,
+) -> usize {
+    let (w, h) = (camera.width as f32, camera.height as f32);
+    let (mx, my) = (LEAVE_OUT_MARGIN * w, LEAVE_OUT_MARGIN * h);
+    let seen: Vec<bool> = vertices
+        .iter()
+        .map(|&v| {
+            let p = camera.project(v);
+            p.z > 0.0 && (-mx..w + mx).contains(&p.x) && (-my..h + my).contains(&p.y)
+        })
+        .collect();
+    let outside: Vec<bool> = avatar
+        .uv
+        .triangles
+        .iter()
+        .map(|&t| triangles[t as usize].iter().all(|&v| !seen[v as usize]))
+        .collect();
+    let c = avatar.channels;
+    let order: Vec<usize> = (0..outside.len())
+        .filter(|&i| !outside[i])
+        .chain((0..outside.len()).filter(|&i| outside[i]))
+        .collect();
+    let uv = &avatar.uv;
+    let mut sorted = crate::avatar::UvGaussians {
+        triangles: order.iter().map(|&i| uv.triangles[i]).collect(),
+        barycentrics: order.iter().map(|&i| uv.barycentrics[i]).collect(),
+        offsets: order.iter().map(|&i| uv.offsets[i]).collect(),
+        local: crate::avatar::LocalGaussians {
+            rotations: order.iter().map(|&i| uv.local.rotations[i]).collect(),
+            scales: order.iter().map(|&i| uv.local.scales[i]).collect(),
+            opacities: order.iter().map(|&i| uv.local.opacities[i]).collect(),
+            features: order
+                .iter()
+                .flat_map(|&i| uv.local.features[i * c..(i + 1) * c].iter().copied())
+                .collect(),
+        },
+    };
+    let left_out = outside.iter().filter(|&&o| o).count();
+    let first = order.len() - left_out;
+    for f in sorted.local.features[first * c..].chunks_exact_mut(c) {
+        f[..3].fill(NEUTRAL_FILL);
+        f[3..].fill(0.0);
+    }
+    avatar.uv = sorted;
+    avatar.outside = left_out;
+    for (v, opacity) in avatar.template.opacities.iter_mut().enumerate() {
+        if !seen[v] {
+            *opacity = 0.0;
+        }
+    }
+    left_out
 }

@@ -18,7 +18,11 @@ use crate::body::PosedBody;
 pub struct GpuAvatar {
     pipes: Arc<SplatPipelines>,
     template_count: u32,
-    uv_count: u32,
+    /// UV Gaussians in all, the last `outside` of them on parts the photo did not show.
+    uv_total: u32,
+    outside: u32,
+    /// Whether those are drawn.
+    show_outside: bool,
     triangle_count: u32,
     channels: u32,
     body: (String, usize, usize),
@@ -38,8 +42,9 @@ pub struct GpuAvatar {
     posed: wgpu::Buffer,
     /// Each posed triangle's corners and frame, between the rig's frames and UV passes.
     frames: wgpu::Buffer,
-    /// The splatter buffers generation the bind group and the features were made for.
-    bound: Option<(u64, wgpu::BindGroup)>,
+    /// The splatter buffers generation and the count drawn the bind group and the features
+    /// were made for.
+    bound: Option<((u64, usize), wgpu::BindGroup)>,
     scratch: Vec<PosedVertex>,
 }
 
@@ -97,7 +102,7 @@ impl GpuAvatar {
             .collect();
         let params = RigParams {
             template_count: template.len() as u32,
-            uv_count: uv.len() as u32,
+            uv_count: (uv.len() - avatar.outside) as u32,
             triangle_count: triangles.len() as u32,
             _pad: 0,
         };
@@ -107,7 +112,9 @@ impl GpuAvatar {
         features.extend_from_slice(&u.local.features);
         Self {
             template_count: params.template_count,
-            uv_count: params.uv_count,
+            uv_total: uv.len() as u32,
+            outside: avatar.outside as u32,
+            show_outside: false,
             triangle_count: params.triangle_count,
             channels: avatar.channels as u32,
             body: (
@@ -130,7 +137,7 @@ impl GpuAvatar {
                 device,
                 "Rig::params",
                 bytemuck::bytes_of(&params),
-                wgpu::BufferUsages::UNIFORM,
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             ),
             template: constant(
                 device,
@@ -163,29 +170,56 @@ impl GpuAvatar {
         }
     }
 
-    /// Gaussians in all: template then UV.
+    /// The UV Gaussians drawn.
+    fn uv_count(&self) -> u32 {
+        if self.show_outside {
+            self.uv_total
+        } else {
+            self.uv_total - self.outside
+        }
+    }
+
+    /// Gaussians drawn: template then UV.
     pub fn len(&self) -> usize {
-        (self.template_count + self.uv_count) as usize
+        (self.template_count + self.uv_count()) as usize
+    }
+
+    /// Draws the parts the photo did not show (in neutral grey) too, or not; takes effect at the
+    /// next [`Self::attach`] and [`Self::encode`].
+    pub fn show_outside(&mut self, queue: &wgpu::Queue, show: bool) {
+        if show == self.show_outside {
+            return;
+        }
+        self.show_outside = show;
+        let params = RigParams {
+            template_count: self.template_count,
+            uv_count: self.uv_count(),
+            triangle_count: self.triangle_count,
+            _pad: 0,
+        };
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
     }
 
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
-    /// Makes `splatter` hold this avatar: room for its Gaussians and its features, written
-    /// again only when the splatter's buffers were reallocated or held something else.
+    /// Makes `splatter` hold this avatar: room for the Gaussians drawn and their features,
+    /// written again only when the splatter's buffers were reallocated, held something else, or
+    /// the Gaussians drawn changed.
     pub fn attach(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         splatter: &mut Splatter,
     ) -> Result<(), SplatError> {
-        splatter.reserve(device, queue, self.len(), self.channels)?;
-        let generation = splatter.buffers_generation();
+        let count = self.len();
+        splatter.reserve(device, queue, count, self.channels)?;
+        let generation = (splatter.buffers_generation(), count);
         if self.bound.as_ref().is_some_and(|(g, _)| *g == generation) {
             return Ok(());
         }
-        splatter.write_features(queue, &self.features);
+        splatter.write_features(queue, &self.features[..count * self.channels as usize]);
         let Some(output) = splatter.gaussian_buffer() else {
             return Ok(());
         };
@@ -258,7 +292,7 @@ impl GpuAvatar {
         for (pipeline, count) in [
             (&self.pipes.rig_frames, self.triangle_count),
             (&self.pipes.rig_template, self.template_count),
-            (&self.pipes.rig_uv, self.uv_count),
+            (&self.pipes.rig_uv, self.uv_count()),
         ] {
             pass.set_pipeline(pipeline);
             dispatch_1d(&mut pass, count.div_ceil(256));

@@ -36,11 +36,13 @@ pub struct Frame {
 pub enum Content {
     /// A Gaussian cloud as it is (a splat file, a test scene).
     Cloud { cloud: CloudRef, look: Look },
-    /// An avatar posed on its body, posed on the GPU.
+    /// An avatar posed on its body, posed on the GPU; with `outside`, the parts its photo did
+    /// not show too (neutral grey).
     Avatar {
         avatar: AvatarRef,
         pose: PoseRef,
         look: Look,
+        outside: bool,
     },
     /// A posed body as a mesh.
     Mesh(MeshFrame),
@@ -129,7 +131,11 @@ pub struct ViewReport {
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Source {
     Cloud(u64),
-    Avatar { id: u64, preview: bool },
+    Avatar {
+        id: u64,
+        preview: bool,
+        outside: bool,
+    },
 }
 
 #[derive(PartialEq)]
@@ -243,10 +249,16 @@ impl ViewRenderer {
                 }
                 self.prepare_splats(device, queue, None, false, frame, look, report)
             }
-            Content::Avatar { avatar, pose, look } => {
+            Content::Avatar {
+                avatar,
+                pose,
+                look,
+                outside,
+            } => {
                 let source = Source::Avatar {
                     id: avatar.id,
                     preview: frame.preview,
+                    outside: *outside,
                 };
                 if self.avatar.as_ref().is_none_or(|a| a.id != avatar.id) {
                     self.avatar = Some(ShownAvatar {
@@ -280,6 +292,7 @@ impl ViewRenderer {
                     }),
                     false => &mut shown.full,
                 };
+                gpu.show_outside(queue, *outside);
                 if let Err(e) = gpu.attach(device, queue, &mut self.splatter) {
                     report.error = Some(e.to_string());
                     return None;

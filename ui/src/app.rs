@@ -217,9 +217,7 @@ impl GuavaApp {
 
     /// The avatar panel's description (its kind and source) and its Gaussian count.
     pub fn avatar_info(&self) -> Option<(&str, usize)> {
-        self.avatar
-            .as_ref()
-            .map(|a| (a.label.as_str(), a.avatar.len()))
+        self.avatar.as_ref().map(|a| (a.label.as_str(), a.drawn()))
     }
 
     pub fn scene_len(&self) -> Option<usize> {

@@ -27,9 +27,16 @@ pub struct AvatarState {
     pub tracked_photo: Option<TrackedPhoto>,
     /// The source photo's camera (world→camera, `invtanfov`), when the avatar was made here.
     pub source_camera: Option<(glam::Mat4, f32)>,
+    /// Whether the body its photo did not show is drawn (neutral grey).
+    pub show_outside: bool,
 }
 
 impl AvatarState {
+    /// The Gaussians drawn: template and UV, without the parts left out unless they are shown.
+    pub fn drawn(&self) -> usize {
+        self.avatar.template.len() + self.avatar.shown_uv(self.show_outside)
+    }
+
     pub fn new(
         avatar: Avatar,
         label: String,
@@ -48,6 +55,7 @@ impl AvatarState {
             source,
             tracked_photo,
             source_camera,
+            show_outside: false,
         }
     }
 

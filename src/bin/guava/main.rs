@@ -44,8 +44,12 @@ enum Command {
         motion: Option<PathBuf>,
         #[arg(long, default_value_t = 0.0, requires = "motion")]
         time: f64,
-        /// With --motion: view through the motion's tracked camera (512², as GUAVA renders).
-        #[arg(long, requires = "motion")]
+        /// With --avatar: pose it as its photo shows it (the view it keeps).
+        #[arg(long, requires = "avatar", conflicts_with = "motion")]
+        source_pose: bool,
+        /// With --motion or --source-pose: view through the motion's tracked camera or the
+        /// photo's camera (512², as GUAVA renders).
+        #[arg(long)]
         tracked_camera: bool,
         #[arg(long)]
         out: PathBuf,
@@ -195,6 +199,7 @@ fn run(cli: Cli) -> Result<()> {
             ehm,
             motion,
             time,
+            source_pose,
             tracked_camera,
             out,
             width,
@@ -212,17 +217,21 @@ fn run(cli: Cli) -> Result<()> {
                 }
                 (None, Some(avatar)) => {
                     let avatar_file = guava::avatar::Avatar::load(&avatar)?;
+                    let posing = match (motion.as_deref(), source_pose) {
+                        (Some(m), _) => Posing::Motion(m, time),
+                        (None, true) => Posing::Source,
+                        (None, false) => Posing::Rest,
+                    };
                     let (cloud, camera) = match ehm {
                         Some(ehm) => {
                             let mut body = guava::body::EhmModel::load(&ehm)?;
                             avatar_file.apply_ehm_identity(&mut body);
-                            posed_avatar(&avatar_file, &body, motion.as_deref(), time)
+                            posed_avatar(&avatar_file, &body, posing)
                         }
                         None => posed_avatar(
                             &avatar_file,
                             &guava::body::BodyModel::default_body()?,
-                            motion.as_deref(),
-                            time,
+                            posing,
                         ),
                     }
                     .with_context(|| avatar.display().to_string())?;
@@ -235,7 +244,10 @@ fn run(cli: Cli) -> Result<()> {
                 (None, None) => anyhow::bail!("give --ply or --avatar"),
             };
             if tracked_camera && tracked.is_none() {
-                anyhow::bail!("--tracked-camera: the motion has no tracked camera");
+                anyhow::bail!(
+                    "--tracked-camera: no camera to look through (give a motion with tracked \
+                     cameras, or --source-pose for an avatar that keeps its photo's view)"
+                );
             }
             let camera = match tracked {
                 Some(camera) => camera,
@@ -313,23 +325,42 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
-/// An avatar posed on its body: at rest, or by `motion` at `time` (then also the motion's tracked
-/// camera at that time, if it has one).
+/// How `guava render` poses an avatar.
+enum Posing<'a> {
+    Rest,
+    /// A motion file at a time.
+    Motion(&'a Path, f64),
+    /// As its photo shows it.
+    Source,
+}
+
+/// An avatar posed on its body, with the camera that goes with the pose: the motion's tracked
+/// camera at that time (if it has one), or the photo's.
 fn posed_avatar(
     avatar: &guava::avatar::Avatar,
     body: &impl guava::body::Posable,
-    motion: Option<&Path>,
-    time: f64,
+    posing: Posing,
 ) -> Result<(guava::gaussians::GaussianCloud, Option<Camera>)> {
     use guava::body::{BodyPose, PosedBody};
     avatar.check_body(body).map_err(anyhow::Error::msg)?;
     let mut pose = BodyPose::rest(body);
     let mut camera = None;
-    if let Some(motion) = motion {
-        let t = guava::tracking::import::open_motion(motion)?.tracking;
-        guava::tracking::Retarget::new(&t, body).sample(&t, time, &mut pose);
-        camera = guava::tracking::camera_at(&t, time)
-            .map(|(w2c, invtanfov)| Camera::guava(w2c, guava::photo::SOURCE_SIZE, invtanfov));
+    match posing {
+        Posing::Rest => {}
+        Posing::Motion(motion, time) => {
+            let t = guava::tracking::import::open_motion(motion)?.tracking;
+            guava::tracking::Retarget::new(&t, body).sample(&t, time, &mut pose);
+            camera = guava::tracking::camera_at(&t, time)
+                .map(|(w2c, invtanfov)| Camera::guava(w2c, guava::photo::SOURCE_SIZE, invtanfov));
+        }
+        Posing::Source => {
+            let view = avatar
+                .source_view
+                .as_ref()
+                .ok_or(guava::eval::EvalError::NoSourceView)?;
+            pose = view.pose.clone();
+            camera = Some(view.camera);
+        }
     }
     avatar.apply_identity(body, &mut pose);
     let mut posed = PosedBody::default();

@@ -30,6 +30,15 @@ impl GuavaApp {
                 AvatarKind::Guava => "RGB, then GUAVA's latent features for its refiner",
             }
         ));
+        if a.outside > 0 {
+            ui.checkbox(
+                &mut avatar.show_outside,
+                format!(
+                    "show the body the photo did not show ({} Gaussians, grey)",
+                    a.outside
+                ),
+            );
+        }
         let mut action = None;
         if let (Some(source), Some(body)) = (&mut avatar.source, &mut self.body) {
             egui::CollapsingHeader::new("Source photo and fit")

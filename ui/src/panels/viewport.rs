@@ -75,6 +75,7 @@ impl GuavaApp {
                 avatar: avatar.reference(body),
                 pose: body.posed(),
                 look: look(avatar.avatar.channels),
+                outside: avatar.show_outside,
             },
             (View::Body, _, Some(body), _) => Content::Mesh(body.frame(self.background)),
             _ => return,

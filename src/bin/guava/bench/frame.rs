@@ -196,6 +196,7 @@ fn interaction(
                         background: vec![0.0; avatar.channels],
                         display: Display::default(),
                     },
+                    outside: false,
                 },
                 camera: Camera::from_fov_y(
                     orbit_y_up(target, distance, yaw, 0.0),
