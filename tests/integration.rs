@@ -9,6 +9,7 @@ mod body;
 mod cli;
 mod ehm;
 mod ehm_fit;
+mod fidelity;
 mod fit;
 mod framing;
 mod guava_mode;

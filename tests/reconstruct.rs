@@ -273,49 +273,70 @@ fn hidden_texels_get_no_colour_from_the_occluder() {
     assert!(torso_seen > 5_000 && arm_seen > 1_000);
 }
 
+/// A rigid motion of the body (the root turned, the whole translated) moves every Gaussian
+/// rigidly: on the bare body, and on a subject in a jacket with hair, whose avatar carries the
+/// clothing layer (displaced vertices) and Gaussians beyond the body bound to their triangles.
 #[test]
 fn animation_follows_a_rigid_motion_exactly() {
     let body = body();
-    let (view, image) = rest_photo();
-    let (avatar, _) = reconstruct(&view, &image).expect("reconstruct");
-    let rest = cloud_for(&avatar, &view.pose);
-    let mut moved_pose = view.pose.clone();
-    let axis_angle = Vec3::new(0.3, -1.1, 0.5);
-    moved_pose
-        .set_rotation(body, "root", axis_angle)
-        .expect("root");
-    moved_pose.translation = Vec3::new(0.2, -0.1, 0.4);
-    let moved = cloud_for(&avatar, &moved_pose);
-    // The root turns about its rest position.
-    let root = body.joints[0].rest;
-    let r = glam::Mat3::from_axis_angle(axis_angle.normalize(), axis_angle.length());
-    let q_r = quat_from_matrix(Mat3A::from(r));
-    let mut worst = (0.0f32, 0.0f32, 0.0f32);
-    for i in 0..rest.len() {
-        let p = Vec3::from(rest.positions[i]);
-        let expected = r * (p - root) + root + moved_pose.translation;
-        worst.0 = worst
-            .0
-            .max(expected.distance(Vec3::from(moved.positions[i])));
-        let q = quat_mul(q_r, rest.rotations[i]);
-        let dot: f32 = q.iter().zip(&moved.rotations[i]).map(|(a, b)| a * b).sum();
-        worst.1 = worst.1.max(1.0 - dot.abs());
-        let s = rest.scales[i]
-            .iter()
-            .zip(&moved.scales[i])
-            .map(|(a, b)| (a - b).abs() / a.max(1e-9));
-        worst.2 = worst.2.max(s.fold(0.0, f32::max));
+    let (view, bare) = rest_photo();
+    let subject = guava::synthetic::Subject::clothed_and_haired(body);
+    let dressed = subject
+        .photo(&view.pose, &view.camera, guava::synthetic::subject_texture)
+        .expect("photo");
+    for (name, image) in [("bare", &bare), ("clothed and haired", &dressed)] {
+        let (avatar, report) = reconstruct(&view, image).expect("reconstruct");
+        if name != "bare" {
+            let displaced = avatar
+                .displacements
+                .iter()
+                .filter(|d| d.abs() > 1e-3)
+                .count();
+            println!(
+                "{name}: {displaced} vertices displaced, {} extras",
+                report.extras
+            );
+            assert!(displaced > 1_000 && report.extras > 1_000, "{report:?}");
+        }
+        let rest = cloud_for(&avatar, &view.pose);
+        let mut moved_pose = view.pose.clone();
+        let axis_angle = Vec3::new(0.3, -1.1, 0.5);
+        moved_pose
+            .set_rotation(body, "root", axis_angle)
+            .expect("root");
+        moved_pose.translation = Vec3::new(0.2, -0.1, 0.4);
+        let moved = cloud_for(&avatar, &moved_pose);
+        // The root turns about its rest position.
+        let root = body.joints[0].rest;
+        let r = glam::Mat3::from_axis_angle(axis_angle.normalize(), axis_angle.length());
+        let q_r = quat_from_matrix(Mat3A::from(r));
+        let mut worst = (0.0f32, 0.0f32, 0.0f32);
+        for i in 0..rest.len() {
+            let p = Vec3::from(rest.positions[i]);
+            let expected = r * (p - root) + root + moved_pose.translation;
+            worst.0 = worst
+                .0
+                .max(expected.distance(Vec3::from(moved.positions[i])));
+            let q = quat_mul(q_r, rest.rotations[i]);
+            let dot: f32 = q.iter().zip(&moved.rotations[i]).map(|(a, b)| a * b).sum();
+            worst.1 = worst.1.max(1.0 - dot.abs());
+            let s = rest.scales[i]
+                .iter()
+                .zip(&moved.scales[i])
+                .map(|(a, b)| (a - b).abs() / a.max(1e-9));
+            worst.2 = worst.2.max(s.fold(0.0, f32::max));
+        }
+        println!(
+            "{name}, rigid motion: position {} m, rotation 1−|q·q'| {}, relative scale {}",
+            worst.0, worst.1, worst.2
+        );
+        assert!(
+            worst.0 < 1e-5 && worst.1 < 1e-5 && worst.2 < 5e-4,
+            "{name}: {worst:?}"
+        );
+        assert_eq!(rest.features, moved.features);
+        assert_eq!(rest.opacities, moved.opacities);
     }
-    println!(
-        "rigid motion: position {} m, rotation 1−|q·q'| {}, relative scale {}",
-        worst.0, worst.1, worst.2
-    );
-    assert!(
-        worst.0 < 1e-5 && worst.1 < 1e-5 && worst.2 < 5e-4,
-        "{worst:?}"
-    );
-    assert_eq!(rest.features, moved.features);
-    assert_eq!(rest.opacities, moved.opacities);
 }
 
 #[test]
@@ -373,6 +394,42 @@ fn degenerate_inputs_give_errors_or_sane_results() {
             Err(ReconstructError::NothingVisible) => {}
             Err(e) => panic!("camera at {eye}: {e}"),
         }
+    }
+
+    // Masks that are not one person's outline: the whole frame (an opaque alpha channel is no
+    // mask when read from a file, but a mask given as pixels can be anything), the person with a
+    // blob far from them, the person shifted off where the view puts the body. Each gives a
+    // finite avatar that still holds the body (the clothing layer is bounded: 6 cm out).
+    let opaque = image::RgbaImage::from_fn(image.width(), image.height(), |x, y| {
+        let p = image.get_pixel(x, y).0;
+        image::Rgba([p[0], p[1], p[2], 255])
+    });
+    let mut blob = image.clone();
+    for y in 20..90 {
+        for x in 20..90 {
+            blob.put_pixel(x, y, image::Rgba([200, 40, 40, 255]));
+        }
+    }
+    let mut shifted = image::RgbaImage::new(image.width(), image.height());
+    image::imageops::overlay(&mut shifted, &image, 60, 25);
+    for (name, masked) in [
+        ("whole frame", &opaque),
+        ("blob", &blob),
+        ("shifted", &shifted),
+    ] {
+        let (avatar, report) = reconstruct(&view, masked).expect(name);
+        avatar.validate().expect("finite avatar");
+        let cloud = cloud_for(&avatar, &view.pose);
+        assert!(cloud.positions.iter().flatten().all(|x| x.is_finite()));
+        let worst = avatar
+            .displacements
+            .iter()
+            .fold(0.0f32, |m, d| m.max(d.abs()));
+        println!(
+            "{name}: {} observed texels, {} extras, largest displacement {worst:.3} m",
+            report.observed, report.extras
+        );
+        assert!(report.observed > 10_000 && worst <= 0.06 + 1e-6, "{name}");
     }
 
     // NaN in the source pose is treated as zero (and counted by posing), never propagated.
@@ -651,14 +708,19 @@ fn the_gpu_rig_matches_the_cpu_rig() {
     assert!(e.to_string().contains(&avatar.body), "{e}");
 }
 
-/// Whether a photo carries its own mask is read from its header: RGBA and grey-alpha PNGs have
-/// one, RGB PNG and JPEG do not, and a missing or unreadable file is an error that names it.
+/// Whether a photo carries its own mask: RGBA and grey-alpha PNGs with some transparency do, an
+/// RGBA PNG opaque everywhere, RGB PNG and JPEG do not, and a missing or unreadable file is an
+/// error that names it.
 #[test]
-fn a_photos_alpha_is_known_before_decoding() {
+fn a_photo_carries_a_mask_when_its_alpha_is_not_opaque() {
     let dir = std::env::temp_dir().join(format!("guava-alpha-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
     let rgba = dir.join("rgba.png");
     image::RgbaImage::new(8, 8).save(&rgba).expect("png");
+    let opaque = dir.join("opaque.png");
+    image::RgbaImage::from_pixel(8, 8, image::Rgba([9, 9, 9, 255]))
+        .save(&opaque)
+        .expect("png");
     let grey_alpha = dir.join("la.png");
     image::GrayAlphaImage::new(8, 8)
         .save(&grey_alpha)
@@ -669,12 +731,13 @@ fn a_photos_alpha_is_known_before_decoding() {
     image::RgbImage::new(8, 8).save(&jpeg).expect("jpeg");
     for (path, alpha) in [
         (&rgba, true),
+        (&opaque, false),
         (&grey_alpha, true),
         (&rgb, false),
         (&jpeg, false),
     ] {
         assert_eq!(
-            SourceImage::has_alpha(path).expect("readable"),
+            SourceImage::decode(path).expect("readable").1,
             alpha,
             "{path:?}"
         );
@@ -682,7 +745,7 @@ fn a_photos_alpha_is_known_before_decoding() {
     let text = dir.join("notes.png");
     std::fs::write(&text, "not an image").expect("write");
     for bad in [dir.join("missing.png"), text] {
-        let e = SourceImage::has_alpha(&bad).expect_err("unreadable");
+        let e = SourceImage::decode(&bad).expect_err("unreadable");
         let name = bad
             .file_name()
             .expect("name")

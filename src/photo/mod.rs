@@ -97,31 +97,17 @@ impl SourceImage {
         Self::load_at(path, None, SOURCE_SIZE)
     }
 
-    /// Whether the photo at `path` has an alpha channel (its person mask), read from its header
-    /// without decoding the pixels: a photo with one needs no pose model for a mask.
-    pub fn has_alpha(path: &Path) -> Result<bool, PhotoError> {
-        use image::ImageDecoder;
-        let fail = |e: &dyn std::fmt::Display| PhotoError {
-            file: path.display().to_string(),
-            problem: e.to_string(),
-        };
-        let reader = image::ImageReader::open(path)
-            .map_err(|e| fail(&e))?
-            .with_guessed_format()
-            .map_err(|e| fail(&e))?;
-        let decoder = reader.into_decoder().map_err(|e| fail(&e))?;
-        Ok(decoder.color_type().has_alpha())
-    }
-
     /// [`Self::load`] of `crop` (`None`: the centred square) at `size`².
     pub fn load_at(path: &Path, crop: Option<Crop>, size: u32) -> Result<Self, PhotoError> {
         let (decoded, has_alpha) = Self::decode(path)?;
         Self::from_rgba_at(&decoded, crop, has_alpha, &path.display().to_string(), size)
     }
 
-    /// The photo's pixels, upright, and whether it has an alpha channel, for making it at
-    /// several sizes ([`Self::from_rgba_at`]) from one decoding. Phones store a portrait
-    /// sideways with an Exif orientation tag; it is applied here, as every image viewer does.
+    /// The photo's pixels, upright, and whether its alpha channel is a person mask, for making it
+    /// at several sizes ([`Self::from_rgba_at`]) from one decoding. Phones store a portrait
+    /// sideways with an Exif orientation tag; it is applied here, as every image viewer does. An
+    /// alpha channel opaque everywhere (editors and screenshots write them) is no mask: taken as
+    /// one, every background pixel became a Gaussian of the person.
     pub fn decode(path: &Path) -> Result<(RgbaImage, bool), PhotoError> {
         use image::ImageDecoder;
         let fail = |e: image::ImageError| PhotoError {
@@ -137,8 +123,9 @@ impl SourceImage {
         let orientation = decoder.orientation().map_err(fail)?;
         let mut decoded = image::DynamicImage::from_decoder(decoder).map_err(fail)?;
         decoded.apply_orientation(orientation);
-        let has_alpha = decoded.color().has_alpha();
-        Ok((decoded.to_rgba8(), has_alpha))
+        let pixels = decoded.to_rgba8();
+        let has_alpha = decoded.color().has_alpha() && pixels.pixels().any(|p| p[3] < u8::MAX);
+        Ok((pixels, has_alpha))
     }
 
     /// Crops the centred square, resizes it to [`SOURCE_SIZE`] and applies the alpha as mask when
