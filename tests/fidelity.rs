@@ -114,6 +114,7 @@ fn the_silhouette_stage_recovers_a_known_shape_and_pose() {
         face: None,
         face_skipped: None,
         hands: None,
+        body_from_face: None,
         unseen_arms: Vec::new(),
         gaze: None,
     };

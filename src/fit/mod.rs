@@ -23,6 +23,7 @@
 mod face;
 mod gaze;
 mod hand;
+mod head_and_shoulders;
 mod lm;
 mod problem;
 mod report;
@@ -166,10 +167,32 @@ pub fn fit_detections(
     face_model: &mut FaceLandmarker,
     side: u32,
 ) -> Result<(SourceView, FitReport), FitError> {
+    // Without a body from the pose model (no person, or points that contradict the face: a
+    // photo framed tighter than GUAVA's), the head and shoulders from the face mesh and the
+    // person mask, or no fit.
     let presence = detections.pose.presence;
-    if presence.is_nan() || presence < MIN_PRESENCE {
-        return Err(FitError::NoPerson { presence });
-    }
+    let no_body = if presence.is_nan() || presence < MIN_PRESENCE {
+        Some(format!("the pose model's presence is {presence:.2}"))
+    } else {
+        detections
+            .face
+            .as_ref()
+            .and_then(|face| head_and_shoulders::contradicts(&detections.pose.keypoints, face))
+    };
+    let from_face = match &no_body {
+        Some(_) => {
+            let points = detections.face.as_ref().and_then(|face| {
+                head_and_shoulders::keypoints_from_face(
+                    body,
+                    face,
+                    &detections.pose.mask_at(side as usize),
+                    side,
+                )
+            });
+            Some(points.ok_or(FitError::NoPerson { presence })?)
+        }
+        None => None,
+    };
     let embedding = detections
         .face
         .as_ref()
@@ -182,13 +205,14 @@ pub fn fit_detections(
         _ => None,
     };
     let input = FitInput {
-        keypoints: &detections.pose.keypoints,
+        keypoints: from_face.as_deref().unwrap_or(&detections.pose.keypoints),
         face,
         hands: &detections.hands,
         irises: &detections.irises,
     };
     let (view, mut report) = fit_keypoints(body, &input, side)?;
     report.face_skipped = embedding.err();
+    report.body_from_face = no_body;
     Ok((view, report))
 }
 
@@ -573,6 +597,7 @@ pub fn fit_keypoints(
         surface,
         face: face_report,
         face_skipped: None,
+        body_from_face: None,
         unseen_arms: ["left", "right"]
             .into_iter()
             .zip(unseen_arms)

@@ -26,6 +26,10 @@ pub struct FitReport {
     pub face_skipped: Option<String>,
     /// The hand stage, when the hand model found a hand.
     pub hands: Option<HandFitReport>,
+    /// Why the pose model's body was not used, when it was not (no person, or points that
+    /// contradict the face): the head's keypoints came from the face mesh and the shoulders'
+    /// from the person mask.
+    pub body_from_face: Option<String>,
     /// The arms whose elbow and wrist the keypoint models did not see ("left", "right": the
     /// person's): they rest along the body.
     pub unseen_arms: Vec<&'static str>,

@@ -136,6 +136,9 @@ impl Report {
         if let Some(g) = &f.gaze {
             s.push_str(&format!(", gaze to {} irises", g.observed.len()));
         }
+        if f.body_from_face.is_some() {
+            s.push_str(", head and shoulders only (from the face and the person mask)");
+        }
         for side in &f.unseen_arms {
             s.push_str(&format!(", {side} arm unseen (rests along the body)"));
         }
@@ -209,6 +212,12 @@ pub fn fit_lines(f: &FitReport) -> Vec<String> {
         ),
         None => "hands: none found".into(),
     });
+    if let Some(why) = &f.body_from_face {
+        lines.push(format!(
+            "head and shoulders only ({why}): the head's points from the face mesh, the \
+             shoulders' from the person mask"
+        ));
+    }
     if !f.unseen_arms.is_empty() {
         lines.push(format!(
             "unseen, resting along the body: the {} arm",
