@@ -224,6 +224,24 @@ fn reconstruction_with_reduced_networks_animates_and_refuses_mismatches() {
     assert_eq!(cloud.len(), avatar.len());
     assert!(cloud.positions.iter().flatten().all(|v| v.is_finite()));
 
+    // `guava eval`'s metrics run on it as on a default-mode avatar, from the view it keeps (with
+    // random networks this checks the code path, not fidelity).
+    let (m, rendered) = guava::eval::evaluate(
+        &mut crate::common::renderer(),
+        &avatar,
+        &model,
+        None,
+        &photo(view.camera.width),
+    )
+    .expect("evaluates");
+    println!("{m}");
+    assert_eq!(rendered.channels, avatar.channels);
+    assert!((0.0..=1.0).contains(&m.iou) && m.iou > 0.0, "{m}");
+    assert!(
+        m.psnr.is_finite() && m.ssim.is_finite() && m.l1.is_finite(),
+        "{m}"
+    );
+
     // A photo at the wrong size is refused, naming both sizes; cancelling stops it.
     let err = reconstruct_guava(
         &mut models,

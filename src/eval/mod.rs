@@ -22,6 +22,8 @@ pub enum EvalError {
          2 of the file): give the photo's tracking file"
     )]
     NoSourceView,
+    #[error("the render is {render}² and the photo {photo}²: they must be the same size")]
+    Size { render: u32, photo: u32 },
     #[error(transparent)]
     Render(#[from] AvatarRenderError),
     #[error(transparent)]
@@ -54,12 +56,13 @@ pub fn render_view(
 /// How `rendered` (RGB in its first three channels, and its alpha) compares with `photo` (RGB
 /// premultiplied by its mask, the same size).
 pub fn compare(rendered: &SplatImage, photo: &SourceImage) -> Result<Metrics, EvalError> {
+    if (rendered.width, rendered.height) != (photo.size, photo.size) {
+        return Err(EvalError::Size {
+            render: rendered.width,
+            photo: photo.size,
+        });
+    }
     let size = photo.size as usize;
-    assert_eq!(
-        (rendered.width as usize, rendered.height as usize),
-        (size, size),
-        "the render and the photo must be the same size"
-    );
     let mask = photo.mask.as_deref().ok_or(EvalError::NoPerson)?;
     let bounds = metrics::person_box(mask, size).ok_or(EvalError::NoPerson)?;
     let rgb = interleaved_rgb(rendered);
@@ -100,7 +103,8 @@ pub fn side_by_side(photo: &SourceImage, rendered: &SplatImage) -> image::RgbIma
     })
 }
 
-/// Renders `avatar` from its own source view (or `view` when given) and compares it with `photo`.
+/// Renders `avatar` from its own source view (or `view` when given), at the photo's size, and
+/// compares it with `photo`.
 pub fn evaluate(
     renderer: &mut HeadlessRenderer,
     avatar: &Avatar,
@@ -108,9 +112,14 @@ pub fn evaluate(
     view: Option<&SourceView>,
     photo: &SourceImage,
 ) -> Result<(Metrics, SplatImage), EvalError> {
-    let view = view
+    let mut view = view
         .or(avatar.source_view.as_ref())
-        .ok_or(EvalError::NoSourceView)?;
-    let rendered = render_view(renderer, avatar, body, view)?;
+        .ok_or(EvalError::NoSourceView)?
+        .clone();
+    // GUAVA mode's camera is at its networks' image size; the photo is compared at its own.
+    view.camera = view
+        .camera
+        .scaled(photo.size as f32 / view.camera.width.max(1) as f32);
+    let rendered = render_view(renderer, avatar, body, &view)?;
     Ok((compare(&rendered, photo)?, rendered))
 }

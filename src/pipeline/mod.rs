@@ -141,6 +141,9 @@ pub struct Source {
 pub struct Outcome {
     pub avatar: Avatar,
     pub view: SourceView,
+    /// The photo as `view` sees it at [`SOURCE_SIZE`], masked (what the avatar is compared with;
+    /// no mask when neither its alpha nor the pose model gave one).
+    pub photo: SourceImage,
     pub report: Report,
 }
 
@@ -334,16 +337,16 @@ impl Pipeline {
             mut report,
         } = source;
         let segmentation = read.detections.as_ref().map(|d| &d.pose);
+        let mut photo = read.image;
+        if let (None, Some(pose)) = (&photo.mask, segmentation) {
+            photo.apply_mask(person_mask(pose, photo.size));
+        }
         let (avatar, core) = match mode {
             Mode::Default(body) => {
                 let uv = self.uv_map(body.name(), body.vertex_count(), DEFAULT_UV_SIZE, || {
                     UvMap::for_body(body, DEFAULT_UV_SIZE)
                 });
-                let mut image = read.image;
-                if let (None, Some(pose)) = (&image.mask, segmentation) {
-                    image.apply_mask(person_mask(pose, image.size));
-                }
-                reconstruct_default(body, &uv, &view, image, &source_name, progress)?
+                reconstruct_default(body, &uv, &view, photo.clone(), &source_name, progress)?
             }
             Mode::Guava { body, networks } => {
                 report.networks = Some(networks.source.clone());
@@ -399,6 +402,7 @@ impl Pipeline {
         Ok(Outcome {
             avatar,
             view,
+            photo,
             report,
         })
     }

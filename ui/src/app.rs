@@ -9,6 +9,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+use guava::eval::Metrics;
 use guava::gaussians::GaussianCloud;
 use guava::guava_mode::GuavaModels;
 use guava::pipeline::Pipeline;
@@ -16,6 +17,7 @@ use guava::render::view::{Display, ViewRenderer, ViewReport};
 
 use crate::avatar_view::{AvatarState, SourcePreview};
 use crate::body_panel::BodyState;
+use crate::fidelity::OffscreenRenderer;
 use crate::jobs::Job;
 use crate::motion::Motion;
 use crate::orbit::OrbitCamera;
@@ -85,6 +87,8 @@ pub(crate) struct Gpu {
     pub adapter: String,
     pub limits: wgpu::Limits,
     pub cpu: bool,
+    /// The same device for rendering off screen on a worker (an avatar against its photo).
+    pub offscreen: Option<Arc<Mutex<OffscreenRenderer>>>,
 }
 
 /// How the viewport is drawn while the user drags, orbits or plays: at a fraction of its
@@ -148,6 +152,13 @@ impl GuavaApp {
                     adapter: guava::gpu::adapter_label(&info),
                     limits: rs.device.limits(),
                     cpu: info.device_type == wgpu::DeviceType::Cpu,
+                    offscreen: Some(Arc::new(Mutex::new(OffscreenRenderer::new(
+                        guava::gpu::GpuContext {
+                            adapter: rs.adapter.clone(),
+                            device: rs.device.clone(),
+                            queue: rs.queue.clone(),
+                        },
+                    )))),
                 }
             }
             None => Gpu {
@@ -155,6 +166,7 @@ impl GuavaApp {
                 adapter: "no wgpu device".into(),
                 limits: wgpu::Limits::default(),
                 cpu: false,
+                offscreen: None,
             },
         };
         let mut app = Self {
@@ -218,6 +230,16 @@ impl GuavaApp {
     /// The avatar panel's description (its kind and source) and its Gaussian count.
     pub fn avatar_info(&self) -> Option<(&str, usize)> {
         self.avatar.as_ref().map(|a| (a.label.as_str(), a.drawn()))
+    }
+
+    /// How the avatar compares with its photo from the photo's camera (and how the previous
+    /// avatar of the same photo did), or why it was not compared; `None` for avatars not made here.
+    pub fn avatar_fidelity(&self) -> Option<Result<(Metrics, Option<Metrics>), &str>> {
+        let fidelity = self.avatar.as_ref()?.fidelity.as_ref()?;
+        Some(match fidelity {
+            Ok(f) => Ok((f.metrics, f.before)),
+            Err(e) => Err(e.as_str()),
+        })
     }
 
     pub fn scene_len(&self) -> Option<usize> {

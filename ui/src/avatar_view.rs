@@ -15,6 +15,7 @@ use guava::tracking::SourceView;
 
 use crate::app::next_id;
 use crate::body_panel::BodyState;
+use crate::fidelity::Fidelity;
 
 pub struct AvatarState {
     pub avatar: Arc<Avatar>,
@@ -29,6 +30,8 @@ pub struct AvatarState {
     pub source_camera: Option<(glam::Mat4, f32)>,
     /// Whether the body its photo did not show is drawn (neutral grey).
     pub show_outside: bool,
+    /// How it compares with its photo, when it was made here (or why it could not be).
+    pub fidelity: Option<Result<Fidelity, String>>,
 }
 
 impl AvatarState {
@@ -42,6 +45,7 @@ impl AvatarState {
         label: String,
         preview: Preview,
         source_camera: Option<(glam::Mat4, f32)>,
+        fidelity: Option<Result<Fidelity, String>>,
     ) -> Self {
         let (source, tracked_photo) = match preview {
             Preview::None => (None, None),
@@ -56,6 +60,7 @@ impl AvatarState {
             tracked_photo,
             source_camera,
             show_outside: false,
+            fidelity,
         }
     }
 

@@ -142,6 +142,7 @@ impl GuavaApp {
             networks: self.networks.as_ref().map(|n| n.models.clone()),
             dwpose: self.dwpose.clone(),
             pipeline: self.pipeline.clone(),
+            offscreen: self.gpu.offscreen.clone(),
         })
     }
 
@@ -240,6 +241,7 @@ impl GuavaApp {
             summary,
             preview,
             source_camera,
+            mut fidelity,
         } = loaded;
         let Some(body) = &mut self.body else {
             return self.error("no body to pose the avatar on".into());
@@ -261,7 +263,20 @@ impl GuavaApp {
             avatar.uv.local.len(),
             avatar.channels
         ));
-        self.avatar = Some(AvatarState::new(avatar, label, preview, source_camera));
+        // Made again from the same photo (the fit adjusted): keep how the last one compared.
+        if let (Some(Ok(new)), Some(old)) = (&mut fidelity, &self.avatar)
+            && old.avatar.source == avatar.source
+            && let Some(Ok(before)) = &old.fidelity
+        {
+            new.before = Some(before.metrics);
+        }
+        self.avatar = Some(AvatarState::new(
+            avatar,
+            label,
+            preview,
+            source_camera,
+            fidelity,
+        ));
         self.camera_mode = CameraMode::Orbit;
         self.view = View::Avatar;
         self.reset_camera();

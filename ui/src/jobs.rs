@@ -17,6 +17,7 @@ use guava::tracking::import::Imported;
 
 use crate::avatar_view::{Preview, SourcePreview, TrackedPhoto};
 use crate::body_model::ViewerBody;
+use crate::fidelity::{Fidelity, OffscreenRenderer};
 
 /// What a worker thread loaded.
 pub enum Loaded {
@@ -40,6 +41,8 @@ pub struct LoadedAvatar {
     pub preview: Preview,
     /// The photo's camera (world→camera, `invtanfov`), when it was made here.
     pub source_camera: Option<(glam::Mat4, f32)>,
+    /// How it compares with its photo, when it was made here (or why it could not be compared).
+    pub fidelity: Option<Result<Fidelity, String>>,
 }
 
 impl LoadedAvatar {
@@ -49,6 +52,7 @@ impl LoadedAvatar {
             summary: None,
             preview: Preview::None,
             source_camera: None,
+            fidelity: None,
         }
     }
 }
@@ -141,6 +145,8 @@ pub struct PhotoJob {
     pub dwpose: Option<PathBuf>,
     /// The session's pipeline (keypoint models, UV map), kept between photos.
     pub pipeline: Arc<Mutex<Pipeline>>,
+    /// The viewer's device, to compare the avatar with its photo (none without a device).
+    pub offscreen: Option<Arc<Mutex<OffscreenRenderer>>>,
 }
 
 impl PhotoJob {
@@ -175,17 +181,42 @@ impl PhotoJob {
             }
         }
         .map_err(|e| e.to_string())?;
-        Ok(self.loaded(outcome, file.as_deref()))
+        job.set_stage("comparing with the photo");
+        let fidelity = self.compare(&outcome);
+        Ok(self.loaded(outcome, fidelity, file.as_deref()))
+    }
+
+    /// The avatar rendered from its photo's camera against the photo (`guava eval`), on the
+    /// body it was made on.
+    fn compare(&self, outcome: &Outcome) -> Option<Result<Fidelity, String>> {
+        let offscreen = self.offscreen.as_ref()?;
+        let mut offscreen = offscreen.lock().unwrap_or_else(|e| e.into_inner());
+        let (avatar, view, photo) = (&outcome.avatar, &outcome.view, &outcome.photo);
+        let compared = match &*self.body {
+            ViewerBody::Ehm(body) if avatar.ehm_identity.is_some() => {
+                let mut tracked = body.clone();
+                avatar.apply_ehm_identity(&mut tracked);
+                offscreen.compare(avatar, &*tracked, view, photo)
+            }
+            body => offscreen.compare(avatar, body, view, photo),
+        };
+        Some(compared.map_err(|e| e.to_string()))
     }
 
     /// The avatar with its summary, its photo's camera and what the panel shows of the photo:
     /// the keypoints and the fit (or, for a GUAVA-mode avatar made from its tracking, the
     /// tracked body over the photo).
-    fn loaded(&self, outcome: Outcome, photo: Option<&Path>) -> Loaded {
+    fn loaded(
+        &self,
+        outcome: Outcome,
+        fidelity: Option<Result<Fidelity, String>>,
+        photo: Option<&Path>,
+    ) -> Loaded {
         let Outcome {
             avatar,
             view,
             report,
+            ..
         } = outcome;
         let camera = (view.camera.view_from_world, view.camera.invtanfov());
         let body = &*self.body;
@@ -218,6 +249,7 @@ impl PhotoJob {
             summary: Some(report.summary()),
             preview: preview.unwrap_or(Preview::None),
             source_camera: Some(camera),
+            fidelity,
         }))
     }
 }

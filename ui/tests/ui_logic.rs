@@ -401,6 +401,15 @@ fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
         label.contains("expression to") && label.contains("face points"),
         "{label}"
     );
+    // The panel compares it with its photo from the photo's camera (as `guava eval` does).
+    let (fitted, before) = h
+        .state()
+        .avatar_fidelity()
+        .expect("compared")
+        .expect("no error");
+    println!("against its photo: {fitted}");
+    assert!(fitted.iou > 0.9 && fitted.psnr > 18.0, "{fitted}");
+    assert_eq!(before, None);
 
     // Adjusting the fit by hand: the body takes the fit's pose and the motion stops driving it;
     // a slider change is what the photo is reconstructed with next.
@@ -431,6 +440,15 @@ fn a_photo_with_tracking_reconstructs_into_an_animated_avatar() {
         !h.state().editing_fit(),
         "a new reconstruction starts with no edit under way"
     );
+    // Made again from the same photo: the panel shows how the last one compared, beside the new.
+    let (adjusted, before) = h
+        .state()
+        .avatar_fidelity()
+        .expect("compared")
+        .expect("no error");
+    println!("adjusted: {adjusted}");
+    assert_eq!(before, Some(fitted));
+    assert!(adjusted.iou.is_finite() && adjusted.psnr.is_finite());
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -538,6 +556,13 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
         _ => panic!("the body is EHM"),
     };
     assert_eq!(EhmIdentityRecord::of(&ehm.identity), identity);
+    // It is compared with its photo too (random networks: the code path, not fidelity).
+    let (m, _) = h
+        .state()
+        .avatar_fidelity()
+        .expect("compared")
+        .expect("no error");
+    assert!(m.iou > 0.0 && m.psnr.is_finite(), "{m}");
 
     // It goes through the splatting pass, and a pose change re-rigs and re-splats it once.
     let stats = splat_stats(&mut h);

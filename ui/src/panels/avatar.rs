@@ -45,6 +45,17 @@ impl GuavaApp {
                 .default_open(true)
                 .show(ui, |ui| action = source.ui(ui, body));
         }
+        match &mut avatar.fidelity {
+            Some(Ok(fidelity)) => {
+                egui::CollapsingHeader::new("Against its photo")
+                    .default_open(true)
+                    .show(ui, |ui| fidelity.ui(ui));
+            }
+            Some(Err(e)) => {
+                ui.label(format!("not compared with its photo: {e}"));
+            }
+            None => {}
+        }
         if let Some(photo) = &mut avatar.tracked_photo {
             egui::CollapsingHeader::new("Source photo and tracking")
                 .default_open(true)
