@@ -199,10 +199,12 @@ impl Footprint {
         // Turning frame axis 0 (x) towards axis 2 (y) by `angle` is a turn about axis 1 by −angle.
         let half = -0.5 * angle;
         let rotation = [half.cos(), 0.0, half.sin(), 0.0];
-        let axes = [
-            major.sqrt(),
-            minor.sqrt().max(major.sqrt() / MAX_ANISOTROPY),
-        ];
+        // A texel on a triangle far smaller than itself (one nearly collinear in the UV layout,
+        // as on the fingers) would stand for metres of surface: no disc reaches past its
+        // triangle's longest edge (there were 20 cm streaks on the demo portrait's hand).
+        let longest = (0..3).fold(0.0f32, |m, k| m.max(v[k].distance(v[(k + 1) % 3])));
+        let major = major.sqrt().min(longest);
+        let axes = [major, minor.sqrt().clamp(major / MAX_ANISOTROPY, major)];
         axes.iter()
             .all(|s| s.is_finite() && *s > 0.0)
             .then_some(Self { rotation, axes })
