@@ -18,6 +18,21 @@ pub enum GpuError {
     },
 }
 
+/// Keeps Mesa's Vulkan device-selection layer from asking Wayland for the default GPU when there
+/// is no Wayland session to ask (no `XDG_RUNTIME_DIR`): libwayland then prints "XDG_RUNTIME_DIR is
+/// invalid or not set" once per adapter enumeration. wgpu chooses the adapter itself, so the
+/// layer has nothing to add there. Call it first thing in `main`, before any thread starts.
+#[allow(unsafe_code)] // the one place: setting an environment variable (unsafe since Rust 2024)
+pub fn quiet_without_wayland() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none()
+        && std::env::var_os("NODEVICE_SELECT").is_none()
+    {
+        // SAFETY: called from `main` before any other thread exists, so nothing reads the
+        // environment concurrently.
+        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
+    }
+}
+
 /// Limits the splatting passes need beyond the WebGPU defaults, capped at what the adapter has:
 /// big storage buffers (1M Gaussians × 64 channels is 256 MiB) and 4096² outputs.
 pub fn required_limits(adapter: &wgpu::Adapter) -> wgpu::Limits {

@@ -33,6 +33,21 @@ fn info_reports_adapter_and_onnx_runtime() {
     );
 }
 
+/// Without a Wayland session (no `XDG_RUNTIME_DIR`, as on a clean server) the CLI prints nothing
+/// but its answer: Mesa's device-selection layer used to make libwayland complain twice.
+#[test]
+fn info_is_quiet_without_a_wayland_session() {
+    let out = Command::new(env!("CARGO_BIN_EXE_guava"))
+        .arg("info")
+        .env_remove("XDG_RUNTIME_DIR")
+        .env_remove("NODEVICE_SELECT")
+        .output()
+        .expect("guava runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
+}
+
 #[test]
 fn no_adapter_is_one_clear_error() {
     // DX12 does not exist on Linux: the same path as a machine without any Vulkan driver.
@@ -101,6 +116,36 @@ fn render_writes_a_png_and_bad_files_are_named() {
         stderr.contains("bad.ply") && stderr.contains("`y` is missing"),
         "{stderr}"
     );
+
+    // Values no camera can use are refused by name, before any work and without a picture:
+    // an image 0 or 9000 pixels wide panicked in the splatter; a field of view of 0°, 360° or
+    // NaN, or an infinite angle, wrote a black PNG and exited 0.
+    std::fs::remove_file(&png).expect("the knot was written");
+    for (flag, value) in [
+        ("--width", "0"),
+        ("--height", "9000"),
+        ("--fov", "0"),
+        ("--fov", "360"),
+        ("--fov", "NaN"),
+        ("--yaw", "inf"),
+        ("--pitch", "-inf"),
+    ] {
+        let (ok, _, stderr) = guava(&[
+            "render",
+            "--ply",
+            ply.to_str().expect("utf-8"),
+            "--out",
+            png.to_str().expect("utf-8"),
+            flag,
+            value,
+        ]);
+        assert!(!ok, "{flag} {value}");
+        assert!(
+            stderr.contains(flag) && !stderr.contains("panicked"),
+            "{flag} {value}: {stderr}"
+        );
+        assert!(!png.exists(), "{flag} {value} wrote a picture");
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 

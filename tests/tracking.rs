@@ -597,6 +597,23 @@ fn smplx_npz_imports_amass_and_per_part_files() {
     t.save(&json).expect("save");
     assert_eq!(&Tracking::load(&json).expect("load"), t);
 
+    // The same fit saved with one array per part and no frame axis (1-D `transl` and
+    // `expression` were refused while 1-D poses and betas were read as one frame).
+    let flat = npz(&[
+        ("global_orient", npy_f32(&[3], &[0.0, 0.3, 0.0])),
+        ("body_pose", npy_f32(&[63], &[0.0; 63])),
+        ("jaw_pose", npy_f32(&[3], &[0.2, 0.0, 0.0])),
+        ("left_hand_pose", npy_f32(&[45], &[0.01; 45])),
+        ("right_hand_pose", npy_f32(&[45], &[0.02; 45])),
+        ("expression", npy_f32(&[10], &[0.3; 10])),
+        ("transl", npy_f32(&[3], &[0.0, 0.1, 0.0])),
+    ]);
+    let path = dir.join("flat.npz");
+    std::fs::write(&path, flat).expect("write");
+    let flat = smplx_npz(&path).expect("1-D arrays read as one frame");
+    assert_eq!(flat.tracking.frames, t.frames);
+    assert_eq!(flat.tracking.parameters, t.parameters);
+
     for (entries, expected) in [
         (
             vec![("poses", npy_f32(&[2, 100], &[0.0; 200]))],

@@ -3,7 +3,10 @@
 //! view-independent colour), `opacity` as a logit, `scale_0..2` as logs, `rot_0..3` as (w, x, y, z).
 //! Channels beyond RGB are stored as `feat_3 … feat_{C−1}`, so 32-channel GUAVA clouds round-trip.
 //! Reading applies the activations (sigmoid, exp, SH DC → colour, quaternion normalisation, as
-//! 3DGS's `GaussianModel` getters do); writing inverts them. Reading also takes PlayCanvas's
+//! 3DGS's `GaussianModel` getters do); writing inverts them. A standard file's colours (no
+//! `feat_*` channels) are clamped at 0, as 3DGS's rasterizer clamps each Gaussian's SH colour
+//! before blending (`computeColorFromSH`), so published scenes shade as in the viewers users
+//! compare with; feature channels (GUAVA's) stay as stored. Reading also takes PlayCanvas's
 //! compressed layout (SuperSplat's `.compressed.ply`, [`compressed`]); writing is always the
 //! standard one.
 
@@ -260,6 +263,9 @@ fn read_standard(
         for c in 0..3 {
             feats[c] = 0.5 + SH_C0 * get(dc[c]);
         }
+        if extra.is_empty() {
+            clamp_colour(&mut feats);
+        }
         for (k, &i) in extra.iter().enumerate() {
             feats[3 + k] = get(i);
         }
@@ -305,10 +311,11 @@ fn read_compressed(
                 words[bad]
             )));
         }
-        let splat = compressed::decode(
+        let mut splat = compressed::decode(
             &chunks[v / compressed::CHUNK_SPLATS],
             words.map(|w| w as u32),
         );
+        clamp_colour(&mut splat.colour);
         cloud.push(
             splat.position,
             splat.rotation,
@@ -319,6 +326,14 @@ fn read_compressed(
         Ok(())
     })?;
     Ok(cloud)
+}
+
+/// 3DGS's rule for a Gaussian's colour: no channel below 0 (`computeColorFromSH` returns
+/// `max(result, 0)`); above 1 is left to the final image.
+fn clamp_colour(rgb: &mut [f32]) {
+    for c in rgb {
+        *c = c.max(0.0);
+    }
 }
 
 fn read_header(input: &mut impl BufRead) -> Result<Header, String> {

@@ -34,6 +34,8 @@ pub enum SplatError {
          (at most {max} Gaussians at this channel count)"
     )]
     TooManyGaussians { count: u64, channels: u32, max: u64 },
+    #[error("a {width}×{height} image: this adapter draws 1 to {max} pixels a side")]
+    ImageSize { width: u32, height: u32, max: u32 },
 }
 
 /// An avatar that could not be drawn: too big for the adapter, or posed on another body.
@@ -184,9 +186,25 @@ impl HeadlessRenderer {
         camera: &Camera,
         background: &[f32],
     ) -> Result<(SplatImage, RenderStats), SplatError> {
+        self.check_size(camera)?;
         let (device, queue) = (&self.gpu.device, &self.gpu.queue);
         self.splatter.upload(device, queue, cloud)?;
         Ok(self.render_uploaded(camera, background))
+    }
+
+    /// Whether the device can draw `camera`'s image.
+    fn check_size(&self, camera: &Camera) -> Result<(), SplatError> {
+        let max = self.gpu.device.limits().max_texture_dimension_2d;
+        let fits = |side| (1..=max).contains(&side);
+        if fits(camera.width) && fits(camera.height) {
+            Ok(())
+        } else {
+            Err(SplatError::ImageSize {
+                width: camera.width,
+                height: camera.height,
+                max,
+            })
+        }
     }
 
     /// Poses `avatar` on the GPU for `posed` (its body posed) and renders it: the frame path of
@@ -198,6 +216,7 @@ impl HeadlessRenderer {
         camera: &Camera,
         background: &[f32],
     ) -> Result<(SplatImage, RenderStats), AvatarRenderError> {
+        self.check_size(camera)?;
         self.pose_avatar(avatar, posed)?;
         Ok(self.render_uploaded(camera, background))
     }

@@ -347,23 +347,34 @@ pub fn smplx_from_npz(npz: &Npz) -> Result<Imported, TrackingError> {
         }
         (rotations, frames)
     };
+    // A single frame may come as 1-D arrays (SMPL-X's per-part parameter files), as the pose
+    // arrays and `betas` may: read [n] as [1, n].
+    let one_dimensional = |key: &str| -> Result<bool, crate::npz::NpzError> {
+        Ok(frames == 1 && npz.shape(key)?.len() == 1)
+    };
     let translation_key = ["trans", "transl"].into_iter().find(|k| npz.contains(k));
     let translations = match translation_key {
-        Some(key) => npz
-            .f32s(key, &[Some(frames), Some(3)])
-            .map_err(fail)?
-            .0
-            .to_vec(),
+        Some(key) => {
+            let shape: &[Option<usize>] = if one_dimensional(key).map_err(fail)? {
+                &[Some(3)]
+            } else {
+                &[Some(frames), Some(3)]
+            };
+            npz.f32s(key, shape).map_err(fail)?.0.to_vec()
+        }
         None => {
             notes.push("no trans/transl: the body stays at the origin".into());
             vec![0.0; 3 * frames]
         }
     };
     let expression = if npz.contains("expression") {
-        let (data, shape) = npz
-            .f32s("expression", &[Some(frames), None])
-            .map_err(fail)?;
-        (shape[1], data.to_vec())
+        let shape: &[Option<usize>] = if one_dimensional("expression").map_err(fail)? {
+            &[None]
+        } else {
+            &[Some(frames), None]
+        };
+        let (data, shape) = npz.f32s("expression", shape).map_err(fail)?;
+        (*shape.last().expect("one axis at least"), data.to_vec())
     } else {
         (0, Vec::new())
     };

@@ -27,6 +27,7 @@ struct Args {
 }
 
 fn main() {
+    guava::gpu::quiet_without_wayland();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let args = Args::parse();
     if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {

@@ -2,6 +2,7 @@
 //! splat file or an avatar to PNG; `guava motion` reads and converts motion files; `guava
 //! synth-photo` and `guava reconstruct` make avatars; `guava bench` times stages.
 
+mod args;
 mod bench;
 mod photo;
 
@@ -42,7 +43,7 @@ enum Command {
         /// With --avatar: pose it from this motion (tracking .json, ARKit .csv, SMPL-X .npz) at --time.
         #[arg(long, requires = "avatar")]
         motion: Option<PathBuf>,
-        #[arg(long, default_value_t = 0.0, requires = "motion")]
+        #[arg(long, default_value_t = 0.0, requires = "motion", value_parser = args::seconds)]
         time: f64,
         /// With --avatar: pose it as its photo shows it (the view it keeps).
         #[arg(long, requires = "avatar", conflicts_with = "motion")]
@@ -53,17 +54,18 @@ enum Command {
         tracked_camera: bool,
         #[arg(long)]
         out: PathBuf,
-        #[arg(long, default_value_t = 512)]
+        /// Image size in pixels (1 to 8192).
+        #[arg(long, default_value_t = 512, value_parser = args::image_side)]
         width: u32,
-        #[arg(long, default_value_t = 512)]
+        #[arg(long, default_value_t = 512, value_parser = args::image_side)]
         height: u32,
-        /// Vertical field of view in degrees.
-        #[arg(long, default_value_t = 50.0)]
+        /// Vertical field of view in degrees (above 0, below 180).
+        #[arg(long, default_value_t = 50.0, value_parser = args::field_of_view)]
         fov: f32,
         /// Orbit angles in degrees around the cloud's centre.
-        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_parser = args::angle)]
         yaw: f32,
-        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_parser = args::angle)]
         pitch: f32,
     },
     /// Read a motion (tracking .json, ARKit .csv, SMPL-X .npz), say what the default body (or an
@@ -84,7 +86,7 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
         /// Camera yaw around the body in degrees (positive: towards the body's left).
-        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_parser = args::angle)]
         yaw: f32,
         /// Who is photographed: the bare body with a colour pattern (the default), or a subject
         /// in a jacket, with hair, or both (skin, cloth and hair textures).
@@ -183,6 +185,7 @@ enum Bench {
 }
 
 fn main() {
+    guava::gpu::quiet_without_wayland();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     if let Err(e) = run(Cli::parse()) {
         eprintln!("guava: {e:#}");
