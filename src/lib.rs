@@ -20,6 +20,7 @@ pub mod pipeline;
 pub mod progress;
 pub mod raster;
 pub mod reconstruct;
+pub mod refine;
 pub mod render;
 pub mod synthetic;
 pub mod tracking;

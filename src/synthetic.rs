@@ -326,6 +326,43 @@ pub fn subject_texture(p: Vec3, material: Material) -> [f32; 3] {
     }
 }
 
+/// A family of subject textures for the refiner's training and held-out pairs: each seed draws,
+/// per material, a base colour, two bands (direction, spatial frequency 4–60 rad/m, amplitude)
+/// and a fine stripe, so that the refiner sees smooth and detailed surfaces in many colours. A
+/// function of the rest point, like [`subject_texture`], so every view and pose agrees.
+pub fn seeded_texture(seed: u64) -> impl Fn(Vec3, Material) -> [f32; 3] + Clone {
+    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03;
+    let mut next = move || {
+        // splitmix64
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f32 / (1u64 << 53) as f32
+    };
+    let mut material = || {
+        let base = [next(), next(), next()].map(|c| 0.12 + 0.76 * c);
+        let mut band = |low: f32, high: f32| {
+            let dir = Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vec3::Y);
+            let frequency = low + (high - low) * next();
+            let amplitude = [next(), next(), next()].map(|a| 0.2 * a);
+            (dir * frequency, 6.3 * next(), amplitude)
+        };
+        (base, [band(4.0, 15.0), band(15.0, 60.0)])
+    };
+    let materials = [material(), material(), material()];
+    move |p: Vec3, m: Material| {
+        let (base, bands) = materials[m as usize];
+        std::array::from_fn(|c| {
+            let wave: f32 = bands
+                .iter()
+                .map(|(k, phase, amplitude)| amplitude[c] * (k.dot(p) + phase).sin())
+                .sum();
+            (base[c] + wave).clamp(0.0, 1.0)
+        })
+    }
+}
+
 /// A plainly lit drawing of `body` with its surface at `vertices` (rest or posed), as
 /// rasterized into `f`: skin, eyes and mouth cavity in flat colours under a light from
 /// `light`'s direction, grey where no triangle is, box-filtered by `supersample` (the fragments'

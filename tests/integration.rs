@@ -18,6 +18,7 @@ mod mesh_view;
 mod onnx_runtime;
 mod ply;
 mod reconstruct;
+mod refiner;
 mod splat_stability;
 mod splat_vs_reference;
 mod tracking;

@@ -1,35 +1,42 @@
 //! A coarse stand-in of an avatar for frames drawn while the user drags, orbits or plays: one UV
-//! Gaussian per triangle in place of the (on average four or five) the avatar binds to it, at
+//! Gaussian per triangle (per cell of offsets from it, for Gaussians standing off the surface) in
+//! place of the (on average four or five) the avatar binds to it, at
 //! their mean place with their mean features, enlarged by √n so it covers what the n covered;
 //! no template Gaussians (they close cracks between UV islands, which the enlarged splats
 //! cover). The splatting pass's per-Gaussian stages (projection, both sorts) cost in proportion
 //! to the count, and on a CPU adapter they outweigh the pixels at any viewport size.
 
+use std::collections::BTreeMap;
+
 use super::{Avatar, LocalGaussians, UvGaussians};
+
+/// Gaussians of one triangle are pooled when their offsets from it fall in the same cell of this
+/// side (the triangle's local units: about metres).
+const GROUP_CELL: f32 = 0.02;
 
 impl Avatar {
     /// The coarse stand-in (see the module): same body, same channels, no template Gaussians.
     pub fn preview(&self) -> Avatar {
         let uv = &self.uv;
         let c = self.channels;
-        let mut by_triangle: Vec<Vec<usize>> = vec![Vec::new(); self.body_triangles];
-        for (i, &t) in uv.triangles.iter().enumerate() {
-            by_triangle[t as usize].push(i);
-        }
-        // Triangles the photo showed first, then those it did not (they stay the trailing block).
+        // Groups: a triangle's Gaussians within one cell of their offsets from its surface, so
+        // that those standing off it (hair and clothing beyond the body, bound to their nearest
+        // triangle) are not pooled into one huge splat on the surface. Triangles the photo showed
+        // first, then those it did not (they stay the trailing block).
         let first_outside = self.shown_uv(false);
-        let outside = |members: &[usize]| members.first().is_some_and(|&i| i >= first_outside);
-        let order = (0..self.body_triangles)
-            .filter(|&t| !outside(&by_triangle[t]))
-            .chain((0..self.body_triangles).filter(|&t| outside(&by_triangle[t])));
+        let mut groups: BTreeMap<(bool, u32, [i32; 3]), Vec<usize>> = BTreeMap::new();
+        for (i, &t) in uv.triangles.iter().enumerate() {
+            let cell = uv.offsets[i].map(|o| (o / GROUP_CELL).floor() as i32);
+            groups
+                .entry((i >= first_outside, t, cell))
+                .or_default()
+                .push(i);
+        }
         let mut out = UvGaussians::default();
         let mut outside_count = 0;
-        for t in order {
-            let members = &by_triangle[t];
-            outside_count += usize::from(outside(members));
-            let Some(&first) = members.first() else {
-                continue;
-            };
+        for ((outside, t, _), members) in groups {
+            outside_count += usize::from(outside);
+            let first = members[0];
             let n = members.len() as f32;
             let mean = |get: &dyn Fn(usize) -> [f32; 3]| {
                 members.iter().fold([0.0; 3], |acc, &i| {
@@ -37,7 +44,7 @@ impl Avatar {
                     [0, 1, 2].map(|k| acc[k] + v[k] / n)
                 })
             };
-            out.triangles.push(t as u32);
+            out.triangles.push(t);
             out.barycentrics.push(mean(&|i| uv.barycentrics[i]));
             out.offsets.push(mean(&|i| uv.offsets[i]));
             let local = &mut out.local;
@@ -53,7 +60,7 @@ impl Avatar {
             );
             let start = local.features.len();
             local.features.resize(start + c, 0.0);
-            for &i in members {
+            for &i in &members {
                 for (acc, v) in local.features[start..]
                     .iter_mut()
                     .zip(&uv.local.features[i * c..(i + 1) * c])

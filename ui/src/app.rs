@@ -17,10 +17,11 @@ use guava::render::view::{Display, ViewRenderer, ViewReport};
 
 use crate::avatar_view::{AvatarState, SourcePreview};
 use crate::body_panel::BodyState;
-use crate::fidelity::OffscreenRenderer;
 use crate::jobs::Job;
 use crate::motion::Motion;
+use crate::offscreen::OffscreenRenderer;
 use crate::orbit::OrbitCamera;
+use crate::refined::RefinedView;
 
 /// Start-up options from the command line.
 #[derive(Clone, Debug, Default)]
@@ -35,6 +36,9 @@ pub struct Options {
     pub autoplay: bool,
     /// Start paused at this time of the motion (seconds), e.g. for scripted screenshots.
     pub motion_time: Option<f32>,
+    /// With nothing else to open, start on the demo portrait's avatar (the window does; tests
+    /// start on the bare body).
+    pub demo_avatar: bool,
 }
 
 /// A new id for something the viewport uploads or re-renders by id (a cloud, an avatar, a body's
@@ -118,6 +122,8 @@ pub struct GuavaApp {
     pub(crate) orbit: OrbitCamera,
     pub(crate) camera_mode: CameraMode,
     pub(crate) display: Display,
+    /// The refiner pass, run when the view settles.
+    pub(crate) refined: RefinedView,
     pub(crate) background: [f32; 3],
     pub(crate) interaction: Interaction,
     pub(crate) report: Arc<Mutex<ViewReport>>,
@@ -182,6 +188,7 @@ impl GuavaApp {
             orbit: OrbitCamera::default(),
             camera_mode: CameraMode::Orbit,
             display: Display::default(),
+            refined: RefinedView::default(),
             background: [0.0; 3],
             // A software adapter cannot splat the full viewport at interactive rates.
             interaction: Interaction {
@@ -207,6 +214,9 @@ impl GuavaApp {
             app.open_test_scene();
         }
         app.queue = options.open.iter().cloned().collect();
+        if options.demo_avatar && app.queue.is_empty() && !options.test_scene {
+            app.queue.push_back(crate::files::demo_portrait());
+        }
         app
     }
 
@@ -278,6 +288,11 @@ impl GuavaApp {
     }
 
     /// What the viewport last reported: counters, renders, the size it drew at.
+    /// Refined frames shown so far (the refiner pass runs once the view settles).
+    pub fn refined_frames(&self) -> u64 {
+        self.refined.frames
+    }
+
     pub fn report(&self) -> ViewReport {
         self.report.lock().map(|r| r.clone()).unwrap_or_default()
     }

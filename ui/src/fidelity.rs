@@ -6,49 +6,30 @@
 use guava::avatar::Avatar;
 use guava::body::Posable;
 use guava::eval::{EvalError, Metrics};
-use guava::gpu::GpuContext;
 use guava::photo::SourceImage;
-use guava::render::HeadlessRenderer;
 use guava::tracking::SourceView;
 
-/// The viewer's device for rendering off screen; the splatting pipelines are built on first use
-/// (on the worker that needs them, not while the window opens).
-pub struct OffscreenRenderer {
-    gpu: Option<GpuContext>,
-    renderer: Option<HeadlessRenderer>,
-}
+use crate::offscreen::OffscreenRenderer;
 
-impl OffscreenRenderer {
-    pub fn new(gpu: GpuContext) -> Self {
-        Self {
-            gpu: Some(gpu),
-            renderer: None,
-        }
-    }
-
-    /// `avatar` on `body` seen as `view` saw `photo`, compared with it.
-    pub fn compare(
-        &mut self,
-        avatar: &Avatar,
-        body: &impl Posable,
-        view: &SourceView,
-        photo: &SourceImage,
-    ) -> Result<Fidelity, EvalError> {
-        if let Some(gpu) = self.gpu.take() {
-            self.renderer = Some(HeadlessRenderer::new(gpu));
-        }
-        let renderer = self.renderer.as_mut().expect("built above");
-        let (metrics, rendered) = guava::eval::evaluate(renderer, avatar, body, Some(view), photo)?;
-        let strip = guava::eval::side_by_side(photo, &rendered);
-        let size = [strip.width() as usize, strip.height() as usize];
-        Ok(Fidelity {
-            metrics,
-            before: None,
-            strip: egui::ColorImage::from_rgb(size, strip.as_raw()),
-            texture: None,
-            shown: Shown::Avatar,
-        })
-    }
+/// `avatar` on `body` seen as `view` saw `photo`, compared with it (`guava eval`).
+pub fn measure(
+    offscreen: &mut OffscreenRenderer,
+    avatar: &Avatar,
+    body: &impl Posable,
+    view: &SourceView,
+    photo: &SourceImage,
+) -> Result<Fidelity, EvalError> {
+    let renderer = offscreen.renderer();
+    let (metrics, rendered) = guava::eval::evaluate(renderer, avatar, body, Some(view), photo)?;
+    let strip = guava::eval::side_by_side(photo, &rendered);
+    let size = [strip.width() as usize, strip.height() as usize];
+    Ok(Fidelity {
+        metrics,
+        before: None,
+        strip: egui::ColorImage::from_rgb(size, strip.as_raw()),
+        texture: None,
+        shown: Shown::Avatar,
+    })
 }
 
 /// Which third of the strip the panel shows.

@@ -270,6 +270,8 @@ impl GuavaApp {
         {
             new.before = Some(before.metrics);
         }
+        // The first launch's demo avatar is seen through its photo's camera, as GUAVA renders.
+        let first_launch = self.options.demo_avatar && self.avatar.is_none();
         self.avatar = Some(AvatarState::new(
             avatar,
             label,
@@ -277,7 +279,10 @@ impl GuavaApp {
             source_camera,
             fidelity,
         ));
-        self.camera_mode = CameraMode::Orbit;
+        self.camera_mode = match first_launch && source_camera.is_some() {
+            true => CameraMode::Source,
+            false => CameraMode::Orbit,
+        };
         self.view = View::Avatar;
         self.reset_camera();
     }

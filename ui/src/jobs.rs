@@ -17,7 +17,8 @@ use guava::tracking::import::Imported;
 
 use crate::avatar_view::{Preview, SourcePreview, TrackedPhoto};
 use crate::body_model::ViewerBody;
-use crate::fidelity::{Fidelity, OffscreenRenderer};
+use crate::fidelity::{self, Fidelity};
+use crate::offscreen::OffscreenRenderer;
 
 /// What a worker thread loaded.
 pub enum Loaded {
@@ -196,9 +197,9 @@ impl PhotoJob {
             ViewerBody::Ehm(body) if avatar.ehm_identity.is_some() => {
                 let mut tracked = body.clone();
                 avatar.apply_ehm_identity(&mut tracked);
-                offscreen.compare(avatar, &*tracked, view, photo)
+                fidelity::measure(&mut offscreen, avatar, &*tracked, view, photo)
             }
-            body => offscreen.compare(avatar, body, view, photo),
+            body => fidelity::measure(&mut offscreen, avatar, body, view, photo),
         };
         Some(compared.map_err(|e| e.to_string()))
     }

@@ -9,8 +9,10 @@ mod fidelity;
 mod files;
 mod jobs;
 pub mod motion;
+mod offscreen;
 pub mod orbit;
 mod panels;
+mod refined;
 mod viewport;
 
 pub use app::{CameraMode, GuavaApp, Options, View};

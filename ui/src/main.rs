@@ -44,6 +44,7 @@ fn main() {
         exit_after_secs: args.exit_after_secs,
         autoplay: true,
         motion_time: args.motion_time,
+        demo_avatar: true,
     };
     let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
     // The splatting pass needs more than egui's default limits; ask for them on egui's own device.

@@ -682,3 +682,51 @@ fn dragging_draws_at_reduced_resolution_and_settles_at_full() {
     }
     assert_eq!(h.state().report().rendered_size, full, "settled");
 }
+
+/// Once the view settles, a default-mode avatar goes through the refiner pass (drawn again off
+/// screen, refined by the default refiner on a worker) and the refined frame is shown without
+/// splatting again; while the user drags, the raw splat image is drawn and no refining happens.
+#[test]
+fn the_settled_view_is_refined_and_a_drag_shows_the_raw_splat() {
+    let mut h = harness(Options::default());
+    h.run();
+    h.state_mut().reconstruct_synthetic_photo();
+    wait_until(&mut h, |app| app.avatar_info().is_some());
+    wait_until(&mut h, |app| app.refined_frames() > 0);
+    assert_eq!(h.state().refined_frames(), 1);
+    frame(&mut h);
+    let renders = h.state().report().renders;
+    for _ in 0..3 {
+        frame(&mut h);
+    }
+    assert_eq!(
+        h.state().report().renders,
+        renders,
+        "the refined frame stays; nothing re-splats"
+    );
+    assert_eq!(h.state().refined_frames(), 1);
+
+    let at = egui::pos2(900.0, 350.0);
+    h.hover_at(at);
+    h.drag_at(at);
+    for dx in [10.0, 20.0, 30.0] {
+        h.hover_at(at + egui::vec2(dx, 0.0));
+        frame(&mut h);
+    }
+    assert!(
+        h.state().report().renders > renders,
+        "the raw splat is drawn while dragging"
+    );
+    assert_eq!(
+        h.state().refined_frames(),
+        1,
+        "nothing refined while dragging"
+    );
+    h.drop_at(at + egui::vec2(30.0, 0.0));
+    wait_until(&mut h, |app| app.refined_frames() > 1);
+    assert_eq!(
+        h.state().refined_frames(),
+        2,
+        "the new view is refined once settled"
+    );
+}

@@ -5,6 +5,7 @@
 mod args;
 mod bench;
 mod photo;
+mod refiner;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
@@ -52,6 +53,9 @@ enum Command {
         /// photo's camera (512², as GUAVA renders).
         #[arg(long)]
         tracked_camera: bool,
+        /// Run the default refiner on the splat image (default-mode avatars).
+        #[arg(long, requires = "avatar")]
+        refine: bool,
         #[arg(long)]
         out: PathBuf,
         /// Image size in pixels (1 to 8192).
@@ -78,6 +82,15 @@ enum Command {
         /// Report retargeting onto this EHM model (.npz) instead of the default body.
         #[arg(long)]
         ehm: Option<PathBuf>,
+    },
+    /// Write the default refiner's training or held-out pairs (synthetic subjects reconstructed
+    /// from a front photo, seen from other views and poses, beside their ground truth) as NumPy
+    /// arrays for tools/train_refiner.py.
+    RefinerPairs {
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long, value_enum, default_value_t = PairSplit::Train)]
+        split: PairSplit,
     },
     /// Write a synthetic photo of the default body (a smooth colour pattern on its surface, drawn
     /// from GUAVA's camera) and its exact tracking beside it (same name, .json): a known answer
@@ -166,6 +179,12 @@ enum Command {
     },
 }
 
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum PairSplit {
+    Train,
+    HeldOut,
+}
+
 #[derive(Subcommand)]
 enum Bench {
     /// The splatting pass: per-stage times over cloud sizes, resolutions and channel counts.
@@ -182,6 +201,9 @@ enum Bench {
     /// How much avatars look like their photos: synthetic subjects with known geometry from the
     /// source view, turned views and a new pose, and the real photos in the repository.
     Fidelity(bench::FidelityBenchArgs),
+    /// The default refiner on held-out pairs (raw against refined, each against the truth),
+    /// and what refining costs per frame.
+    Refiner(bench::RefinerBenchArgs),
 }
 
 fn main() {
@@ -204,6 +226,7 @@ fn run(cli: Cli) -> Result<()> {
             time,
             source_pose,
             tracked_camera,
+            refine,
             out,
             width,
             height,
@@ -220,6 +243,15 @@ fn run(cli: Cli) -> Result<()> {
                 }
                 (None, Some(avatar)) => {
                     let avatar_file = guava::avatar::Avatar::load(&avatar)?;
+                    if refine
+                        && avatar_file.kind != guava::avatar::AvatarKind::DefaultReconstruction
+                    {
+                        anyhow::bail!(
+                            "{}: --refine runs the default refiner, for default-mode avatars \
+                             (GUAVA's own refiner is not exported yet)",
+                            avatar.display()
+                        );
+                    }
                     let posing = match (motion.as_deref(), source_pose) {
                         (Some(m), _) => Posing::Motion(m, time),
                         (None, true) => Posing::Source,
@@ -268,7 +300,12 @@ fn run(cli: Cli) -> Result<()> {
             };
             let mut renderer = HeadlessRenderer::new(GpuContext::headless()?);
             let background = vec![0.0; cloud.channels];
-            let (image, stats) = renderer.render(&cloud, &camera, &background)?;
+            let (mut image, stats) = renderer.render(&cloud, &camera, &background)?;
+            if refine {
+                let runtime = guava::onnx::OnnxRuntime::load()?;
+                let path = std::path::Path::new(guava::refine::DEFAULT_REFINER);
+                image = guava::refine::Refiner::load(runtime, path)?.refine(&image)?;
+            }
             guava::render::save_png(&image.to_rgb8(), &out)?;
             println!(
                 "{name}: {} Gaussians, {} drawn, {} culled ({} tile pairs) → {} [{}]",
@@ -282,6 +319,13 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::SynthPhoto { out, yaw, subject } => photo::synth_photo(&out, yaw, subject),
+        Command::RefinerPairs { out, split } => refiner::write_pairs(
+            &out,
+            match split {
+                PairSplit::Train => guava::refine::pairs::Split::Train,
+                PairSplit::HeldOut => guava::refine::pairs::Split::HeldOut,
+            },
+        ),
         Command::Reconstruct {
             image,
             tracking,
@@ -323,6 +367,7 @@ fn run(cli: Cli) -> Result<()> {
             Bench::Reconstruct(args) => bench::reconstruct(&args),
             Bench::Guava(args) => bench::guava(&args),
             Bench::Frame(args) => bench::frame(&args),
+            Bench::Refiner(args) => bench::refiner(&args),
             Bench::Fidelity(args) => bench::fidelity(&args),
         },
     }

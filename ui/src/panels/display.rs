@@ -45,6 +45,20 @@ impl GuavaApp {
                     .text("1/depth max"),
             );
         }
+        ui.checkbox(&mut self.refined.enabled, "refine when the view settles")
+            .on_hover_text(
+                "the default refiner (a small network trained on synthetic subjects) turns a \
+                 default-mode avatar's splat image into the picture once you stop dragging or \
+                 playing; the raw splat image is shown meanwhile",
+            );
+        if let Some(ms) = self.refined.last_ms {
+            ui.label(format!(
+                "last refined frame: {ms:.0} ms (draw, read back, ONNX Runtime on the CPU)"
+            ));
+        }
+        if let Some(e) = &self.refined.error {
+            ui.colored_label(ui.visuals().error_fg_color, format!("refiner off: {e}"));
+        }
         ui.horizontal(|ui| {
             ui.label("background");
             ui.color_edit_button_rgb(&mut self.background);

@@ -7,6 +7,7 @@ use guava::render::view::{CloudRef, Content, Frame, Look};
 
 use crate::app::{CameraMode, GuavaApp, View};
 use crate::files::demo_portrait;
+use crate::refined::RefineKey;
 use crate::viewport::ViewportCallback;
 
 /// How soon after the last interactive frame a full-resolution one is drawn (scrolling and
@@ -87,9 +88,16 @@ impl GuavaApp {
         if self.interaction.active {
             ui.ctx().request_repaint_after(SETTLE);
         }
+        let camera = self.view_camera(w, h);
+        if !interacting && let Some(texture) = self.refined_frame(ui.ctx(), &content, camera) {
+            let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+            ui.painter().image(texture, rect, uv, egui::Color32::WHITE);
+            self.demo_hint(ui, rect);
+            return;
+        }
         let frame = Frame {
             content,
-            camera: self.view_camera(w, h),
+            camera,
             scale: if self.interaction.active {
                 self.interaction.scale
             } else {
@@ -103,6 +111,62 @@ impl GuavaApp {
         };
         ui.painter()
             .add(egui_wgpu::Callback::new_paint_callback(rect, callback));
+        self.demo_hint(ui, rect);
+    }
+
+    /// On the demo portrait's avatar (the first launch), how to make one's own.
+    fn demo_hint(&self, ui: &egui::Ui, rect: egui::Rect) {
+        let demo = demo_portrait();
+        let showing_demo = self.view == View::Avatar
+            && self.avatar.as_ref().is_some_and(|a| {
+                demo.file_name()
+                    .and_then(|n| n.to_str())
+                    .is_some_and(|n| a.avatar.source == n)
+            });
+        if showing_demo {
+            ui.painter().text(
+                rect.center_bottom() - egui::vec2(0.0, 12.0),
+                egui::Align2::CENTER_BOTTOM,
+                "The demo portrait's default reconstruction. Drop an upper-body photo here to \
+                 make your own avatar.",
+                egui::FontId::proportional(15.0),
+                egui::Color32::from_gray(220),
+            );
+        }
+    }
+
+    /// The refined frame of a default-mode avatar shown in colour, once ready (see
+    /// [`crate::refined`]); `None` while it is made, or when the refiner does not apply.
+    fn refined_frame(
+        &mut self,
+        ctx: &egui::Context,
+        content: &Content,
+        camera: guava::camera::Camera,
+    ) -> Option<egui::TextureId> {
+        let Content::Avatar {
+            avatar,
+            pose,
+            outside,
+            ..
+        } = content
+        else {
+            return None;
+        };
+        let colour = self.display.mode == guava::render::present::PresentMode::Rgb
+            && self.display.rgb_channels == [0, 1, 2];
+        let default_mode = avatar.avatar.kind == guava::avatar::AvatarKind::DefaultReconstruction;
+        let offscreen = self.gpu.offscreen.as_ref()?;
+        if !(self.refined.enabled && colour && default_mode) {
+            return None;
+        }
+        let key = RefineKey {
+            avatar: avatar.id,
+            pose: pose.id,
+            camera,
+            background: self.background,
+            outside: *outside,
+        };
+        self.refined.frame(ctx, key, offscreen, avatar, pose)
     }
 
     fn empty_state_ui(&mut self, ui: &mut egui::Ui, rect: egui::Rect) {

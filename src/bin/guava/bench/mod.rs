@@ -5,6 +5,7 @@ mod fidelity;
 mod frame;
 mod guava_mode;
 mod reconstruct;
+mod refiner;
 mod splat;
 
 pub use body::{BodyBenchArgs, body};
@@ -12,6 +13,7 @@ pub use fidelity::{FidelityBenchArgs, fidelity};
 pub use frame::{FrameBenchArgs, frame};
 pub use guava_mode::{GuavaBenchArgs, guava};
 pub use reconstruct::{ReconstructBenchArgs, reconstruct};
+pub use refiner::{RefinerBenchArgs, refiner};
 pub use splat::{SplatBenchArgs, splat};
 
 fn median(mut v: Vec<f64>) -> f64 {

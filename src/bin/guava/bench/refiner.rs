@@ -1,0 +1,161 @@
+//! `guava bench refiner`: the default refiner on the held-out pairs (subjects, views and poses
+//! it was not trained on): raw splat RGB and refined, each against the ground truth, per subject
+//! kind; then what refining costs per frame where it runs (ONNX Runtime on the CPU, after reading
+//! the splat image back) at the viewer's sizes.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use guava::body::BodyModel;
+use guava::eval::Metrics;
+use guava::gpu::GpuContext;
+use guava::onnx::OnnxRuntime;
+use guava::pipeline::Pipeline;
+use guava::refine::pairs::{self, KINDS, Split};
+use guava::refine::{DEFAULT_REFINER, Refiner};
+use guava::render::{HeadlessRenderer, SplatImage};
+
+use super::body::cpu_name;
+use super::median;
+
+#[derive(clap::Args, Clone, Debug)]
+pub struct RefinerBenchArgs {
+    /// The refiner model (default: the shipped default refiner).
+    #[arg(long)]
+    model: Option<PathBuf>,
+}
+
+#[derive(Default)]
+struct Sums {
+    n: usize,
+    raw: [f64; 3],
+    refined: [f64; 3],
+}
+
+impl Sums {
+    fn add(&mut self, raw: Metrics, refined: Metrics) {
+        self.n += 1;
+        for (s, m) in [(&mut self.raw, raw), (&mut self.refined, refined)] {
+            s[0] += m.psnr;
+            s[1] += m.ssim;
+            s[2] += m.iou;
+        }
+    }
+
+    fn row(&self, name: &str) {
+        let n = self.n.max(1) as f64;
+        let [a, b] = [self.raw, self.refined].map(|s| s.map(|v| v / n));
+        println!(
+            "{name:<20} {:>5} {:>8.2} {:>8.2} {:>+7.2} {:>8.4} {:>8.4} {:>8.4} {:>8.4}",
+            self.n,
+            a[0],
+            b[0],
+            b[0] - a[0],
+            a[1],
+            b[1],
+            a[2],
+            b[2]
+        );
+    }
+}
+
+pub fn refiner(args: &RefinerBenchArgs) -> anyhow::Result<()> {
+    let model = args.model.clone().unwrap_or_else(|| DEFAULT_REFINER.into());
+    let mut refiner = Refiner::load(OnnxRuntime::load()?, &model)?;
+    let body = BodyModel::default_body()?;
+    let mut renderer = HeadlessRenderer::new(GpuContext::headless()?);
+    let mut pipeline = Pipeline::default();
+    println!(
+        "{}: {}\n{}; CPU {}; ONNX Runtime on the CPU\n",
+        model.display(),
+        refiner.description,
+        renderer.gpu.adapter_label(),
+        cpu_name()
+    );
+    println!("held-out pairs (seeds, yaws ±30°/±60° and poses not trained on), mean per pair:");
+    println!(
+        "{:<20} {:>5} {:>8} {:>8} {:>7} {:>8} {:>8} {:>8} {:>8}",
+        "subject",
+        "pairs",
+        "PSNR raw",
+        "refined",
+        "gain",
+        "SSIM raw",
+        "refined",
+        "IoU raw",
+        "refined"
+    );
+    let mut per_kind: Vec<Sums> = KINDS.iter().map(|_| Sums::default()).collect();
+    let mut all = Sums::default();
+    let mut failed = None;
+    for spec in pairs::specs(Split::HeldOut) {
+        pairs::make(
+            &mut renderer,
+            &mut pipeline,
+            &body,
+            &spec,
+            &mut |_, pair| {
+                let refined = match refiner.refine(&pair.input) {
+                    Ok(r) => r,
+                    Err(e) => return failed = Some(e),
+                };
+                if let (Some(raw), Some(fine)) = (pair.score(&pair.input), pair.score(&refined)) {
+                    per_kind[spec.kind].add(raw, fine);
+                    all.add(raw, fine);
+                }
+            },
+        )?;
+        if let Some(e) = failed.take() {
+            return Err(e.into());
+        }
+    }
+    for (kind, sums) in KINDS.iter().zip(&per_kind) {
+        sums.row(kind);
+    }
+    all.row("all");
+
+    println!("\nper frame, medians of 5 (readback of the splat image, then ONNX Runtime):");
+    println!("{:<12} {:>12} {:>12}", "size", "readback ms", "refine ms");
+    for (w, h) in [(256u32, 256u32), (512, 512), (768, 704)] {
+        let image = SplatImage::new(w, h, 4);
+        let (mut readback, mut refine) = (Vec::new(), Vec::new());
+        // A default avatar's layout: RGB and a confidence channel.
+        let knot = guava::gaussians::synthetic::torus_knot(10_000, 4);
+        let mut cloud = guava::gaussians::GaussianCloud::new(4);
+        for i in 0..knot.len() {
+            let rgb = knot.features_of(i);
+            cloud.push(
+                knot.positions[i],
+                knot.rotations[i],
+                knot.scales[i],
+                knot.opacities[i],
+                &[rgb[0], rgb[1], rgb[2], 1.0],
+            );
+        }
+        let camera = guava::camera::Camera::from_fov_y(
+            guava::camera::orbit(glam::Vec3::ZERO, 3.0, 0.3, 0.2),
+            w,
+            h,
+            0.8,
+        );
+        renderer.render(&cloud, &camera, &[0.0; 4])?;
+        for _ in 0..5 {
+            let t = Instant::now();
+            let read = renderer
+                .splatter
+                .read_image(&renderer.gpu.device, &renderer.gpu.queue);
+            readback.push(t.elapsed().as_secs_f64() * 1e3);
+            let input = read.unwrap_or_else(|| image.clone());
+            let t = Instant::now();
+            refiner.refine(&input)?;
+            refine.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        println!(
+            "{:<12} {:>12.1} {:>12.1}",
+            format!("{w}×{h}"),
+            median(readback),
+            median(refine)
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,157 @@
+//! The refiner pass in the viewer: once the view settles (no drag, no playback), the avatar is
+//! drawn again off screen at the viewport's size, refined by the default refiner (ONNX Runtime
+//! on the CPU, a worker thread) and shown in place of the raw splat image until anything changes.
+//! While the user drags or plays the raw splat is shown: the refiner is left out of those frames.
+
+use std::sync::mpsc::{Receiver, TryRecvError};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use guava::camera::Camera;
+use guava::onnx::OnnxRuntime;
+use guava::refine::{DEFAULT_REFINER, Refiner};
+use guava::render::view::{AvatarRef, PoseRef};
+
+use crate::offscreen::OffscreenRenderer;
+
+/// What a refined frame shows: it is current while all of this is unchanged.
+#[derive(Clone, PartialEq)]
+pub struct RefineKey {
+    pub avatar: u64,
+    pub pose: u64,
+    pub camera: Camera,
+    pub background: [f32; 3],
+    pub outside: bool,
+}
+
+/// A refined frame, composited over the background, as 8-bit sRGB.
+struct Refined {
+    image: egui::ColorImage,
+    /// Time to draw, read back and refine it.
+    millis: f32,
+}
+
+pub struct RefinedView {
+    /// Whether the refiner runs when the view settles (the user's switch).
+    pub enabled: bool,
+    refiner: Arc<Mutex<Option<Refiner>>>,
+    pending: Option<(RefineKey, Receiver<Result<Refined, String>>)>,
+    shown: Option<(RefineKey, egui::TextureHandle)>,
+    /// The last refined frame's cost, and the last error (shown in the display panel).
+    pub last_ms: Option<f32>,
+    pub error: Option<String>,
+    /// Refined frames shown so far.
+    pub frames: u64,
+}
+
+impl Default for RefinedView {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            refiner: Arc::default(),
+            pending: None,
+            shown: None,
+            last_ms: None,
+            error: None,
+            frames: 0,
+        }
+    }
+}
+
+impl RefinedView {
+    /// The refined frame for `key` if it is ready; otherwise starts making it (one at a time) and
+    /// returns `None`, so the caller draws the raw splat image meanwhile.
+    pub fn frame(
+        &mut self,
+        ctx: &egui::Context,
+        key: RefineKey,
+        offscreen: &Arc<Mutex<OffscreenRenderer>>,
+        avatar: &AvatarRef,
+        pose: &PoseRef,
+    ) -> Option<egui::TextureId> {
+        if let Some((k, texture)) = &self.shown
+            && *k == key
+        {
+            return Some(texture.id());
+        }
+        if let Some((k, rx)) = &self.pending {
+            match rx.try_recv() {
+                Err(TryRecvError::Empty) => {
+                    ctx.request_repaint_after(std::time::Duration::from_millis(50));
+                    return None;
+                }
+                Ok(Ok(refined)) if *k == key => {
+                    let texture =
+                        ctx.load_texture("refined view", refined.image, Default::default());
+                    self.last_ms = Some(refined.millis);
+                    self.frames += 1;
+                    self.shown = Some((key, texture));
+                    self.pending = None;
+                    return self.shown.as_ref().map(|(_, t)| t.id());
+                }
+                Ok(Err(e)) => {
+                    self.error = Some(e);
+                    self.enabled = false;
+                    self.pending = None;
+                    return None;
+                }
+                // Stale (the view changed while it was made), or the worker is gone.
+                _ => self.pending = None,
+            }
+        }
+        let (tx, rx) = std::sync::mpsc::channel();
+        let (refiner, offscreen) = (self.refiner.clone(), offscreen.clone());
+        let (avatar, pose, job_key, ctx) = (avatar.clone(), pose.clone(), key.clone(), ctx.clone());
+        std::thread::spawn(move || {
+            let refined = refine(&refiner, &offscreen, &avatar, &pose, &job_key);
+            // The receiver is gone if the view moved on: nothing to do then.
+            let _ = tx.send(refined);
+            ctx.request_repaint();
+        });
+        self.pending = Some((key, rx));
+        None
+    }
+}
+
+/// Draws, reads back and refines one frame, composited over the key's background.
+fn refine(
+    refiner: &Mutex<Option<Refiner>>,
+    offscreen: &Mutex<OffscreenRenderer>,
+    avatar: &AvatarRef,
+    pose: &PoseRef,
+    key: &RefineKey,
+) -> Result<Refined, String> {
+    let started = Instant::now();
+    let mut refiner = refiner.lock().unwrap_or_else(|e| e.into_inner());
+    if refiner.is_none() {
+        let runtime = OnnxRuntime::load().map_err(|e| e.to_string())?;
+        *refiner = Some(
+            Refiner::load(runtime, std::path::Path::new(DEFAULT_REFINER))
+                .map_err(|e| e.to_string())?,
+        );
+    }
+    let image = offscreen
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .render_avatar(avatar, pose, key.outside, &key.camera)
+        .map_err(|e| e.to_string())?;
+    let refined = refiner
+        .as_mut()
+        .expect("loaded above")
+        .refine(&image)
+        .map_err(|e| e.to_string())?;
+    let n = refined.alpha.len();
+    let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+    let pixels = (0..n)
+        .map(|i| {
+            let over = |c: usize| {
+                refined.features[c * n + i] + key.background[c] * (1.0 - refined.alpha[i])
+            };
+            egui::Color32::from_rgb(q(over(0)), q(over(1)), q(over(2)))
+        })
+        .collect();
+    Ok(Refined {
+        image: egui::ColorImage::new([refined.width as usize, refined.height as usize], pixels),
+        millis: started.elapsed().as_secs_f32() * 1e3,
+    })
+}
