@@ -64,7 +64,9 @@ impl Npz {
             let Some(name) = name.strip_suffix(".npy").map(str::to_owned) else {
                 continue;
             };
-            let mut bytes = Vec::with_capacity(entry.size() as usize);
+            // The size the archive claims is a hint, capped: a hostile directory must not
+            // allocate what the entry does not hold.
+            let mut bytes = Vec::with_capacity(entry.size().min(1 << 26) as usize);
             entry
                 .read_to_end(&mut bytes)
                 .map_err(|e| fail(format!("{name}: {e}")))?;
@@ -196,22 +198,36 @@ pub fn parse_npy(bytes: &[u8]) -> Result<NpyArray, String> {
         return Err("Fortran order is not supported".into());
     }
     let shape = parse_shape(header_value(header, "shape").ok_or("header has no shape")?)?;
-    let count: usize = shape.iter().product();
+    // Sizes are checked, not trusted: a hostile header must not overflow (found by
+    // tests/fuzz.rs).
+    let count = shape
+        .iter()
+        .try_fold(1usize, |n, &d| n.checked_mul(d))
+        .ok_or_else(|| format!("shape {shape:?} overflows"))?;
     let body = &bytes[start + header_len..];
 
+    if descr.len() < 3 || !descr.is_char_boundary(2) {
+        return Err(format!("dtype {descr:?}"));
+    }
     let (kind, size) = descr.split_at(2);
     let size: usize = size.parse().map_err(|_| format!("dtype {descr:?}"))?;
-    let width = if kind.ends_with('U') { 4 * size } else { size };
+    let width = if kind.ends_with('U') {
+        size.checked_mul(4)
+    } else {
+        Some(size)
+    };
     if !(kind.starts_with('<') || kind.starts_with('|')) && size > 1 {
         return Err(format!("dtype {descr:?}: only little-endian data"));
     }
-    if body.len() < count * width {
+    let needed = width.and_then(|w| count.checked_mul(w));
+    if needed.is_none_or(|n| body.len() < n) {
         return Err(format!(
             "data is {} bytes, shape {shape:?} of {descr} needs {}",
             body.len(),
-            count * width
+            needed.map_or("more than memory holds".into(), |n| n.to_string())
         ));
     }
+    let width = width.unwrap_or_default();
     let words = |w: usize| body.chunks_exact(w).take(count);
     let data = match (&kind[1..], size) {
         ("f", 4) => NpyData::F32(

@@ -235,8 +235,10 @@ fn parse_timecode(tc: &str) -> Option<(f64, u32)> {
     };
     let whole = |x: &str| x.parse::<u32>().ok();
     let frame = ff.split('.').next()?;
+    // In f64: hours as large as a u32 holds must not overflow (found by tests/fuzz.rs).
+    let seconds = |x: &str| whole(x).map(f64::from);
     Some((
-        (whole(h)? * 3600 + whole(m)? * 60 + whole(s)?) as f64,
+        seconds(h)? * 3600.0 + seconds(m)? * 60.0 + seconds(s)?,
         whole(frame)?,
     ))
 }
