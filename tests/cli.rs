@@ -48,6 +48,23 @@ fn info_is_quiet_without_a_wayland_session() {
     assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
 }
 
+/// `guava info | head -0`: stdout closed before anything is printed ends the program as SIGPIPE
+/// would (status 141), not with a panic (status 101).
+#[test]
+fn a_closed_pipe_is_no_panic() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_guava"))
+        .arg("info")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("guava runs");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("ends");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.code(), Some(141), "{stderr}");
+}
+
 #[test]
 fn no_adapter_is_one_clear_error() {
     // DX12 does not exist on Linux: the same path as a machine without any Vulkan driver.

@@ -208,11 +208,30 @@ enum Bench {
 
 fn main() {
     guava::gpu::quiet_without_wayland();
+    exit_quietly_on_a_closed_pipe();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     if let Err(e) = run(Cli::parse()) {
         eprintln!("guava: {e:#}");
         std::process::exit(1);
     }
+}
+
+/// `guava … | head` closes stdout early; `println!` then panics. End as a shell expects a
+/// program killed by SIGPIPE (status 141), without a panic message; other panics as usual.
+fn exit_quietly_on_a_closed_pipe() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let message = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or_default();
+        if message.contains("failed printing to stdout") && message.contains("Broken pipe") {
+            std::process::exit(141);
+        }
+        default(info);
+    }));
 }
 
 fn run(cli: Cli) -> Result<()> {
