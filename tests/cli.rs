@@ -493,3 +493,42 @@ fn eval_prints_the_metrics_of_a_known_answer() {
     assert_eq!(written.dimensions(), (3 * 512, 512));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `guava report --quick` on this machine's adapter: every file is written, every number in its
+/// tables is finite, the Pareto front is not empty and every stability case passes (no timing
+/// is asserted).
+#[test]
+fn report_quick_writes_every_file_with_finite_numbers() {
+    let dir = std::env::temp_dir().join(format!("guava-cli-report-{}", std::process::id()));
+    let (ok, stdout, stderr) = guava(&["report", "--quick", "--out", dir.to_str().expect("utf-8")]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("all pass"), "{stdout}");
+    let read = |name: &str| std::fs::read_to_string(dir.join(name)).expect(name);
+    let (md, svg) = (read("report.md"), read("tradeoffs.svg"));
+    assert!(md.contains("![PSNR against time](tradeoffs.svg)") && md.contains("## Stability"));
+    assert!(svg.contains("<polyline") && svg.contains("</svg>"));
+    let tradeoffs = read("tradeoffs.csv");
+    let mut lines = tradeoffs.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 16, "4 Gaussian sets × 2 sides × refiner off/on");
+    for row in &rows {
+        for (name, cell) in header.iter().zip(row) {
+            if name.ends_with("_ms") || ["psnr_db", "ssim", "iou"].contains(name) {
+                let v: f64 = cell.parse().unwrap_or(f64::NAN);
+                assert!(v.is_finite(), "{name} = {cell:?}");
+            }
+        }
+    }
+    assert!(
+        rows.iter().any(|r| r.last() == Some(&"yes")),
+        "a Pareto front"
+    );
+    let stability = read("stability.csv");
+    assert!(stability.lines().count() > 10);
+    assert!(
+        stability.lines().skip(1).all(|l| l.ends_with(",yes")),
+        "{stability}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

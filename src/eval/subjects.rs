@@ -3,12 +3,14 @@
 //! is compared with the subject itself drawn from the source view, from novel views (yaw ±30°
 //! and ±60°) and in a new pose (the demo motion's wave).
 
+use glam::Vec3;
+
 use super::{EvalError, Metrics, compare, render_view};
 use crate::body::{BodyModel, BodyPose};
 use crate::photo::SourceImage;
-use crate::pipeline::{Mode, Photo, Pipeline, Tracked};
+use crate::pipeline::{Mode, Outcome, Photo, Pipeline, Tracked};
 use crate::render::HeadlessRenderer;
-use crate::synthetic::{Subject, subject_texture, upper_body_camera};
+use crate::synthetic::{Material, Subject, subject_texture, upper_body_camera};
 use crate::tracking::{Retarget, SourceView, demo_motion};
 
 /// Where a subject is compared: its photo's view, turned views, a new pose.
@@ -34,22 +36,21 @@ pub enum SubjectError {
     Tracking(#[from] crate::tracking::TrackingError),
 }
 
-/// `subject` photographed from the front at rest, reconstructed by `pipeline` (default mode, the
-/// exact view given), then compared at every [`VIEWS`] entry: one row of metrics each.
-pub fn score(
-    renderer: &mut HeadlessRenderer,
+/// `subject`, coloured by `texture`, photographed from the front at rest and reconstructed by
+/// `pipeline` (default mode, the exact view given).
+pub fn reconstruct_subject(
     pipeline: &mut Pipeline,
     subject: &Subject,
-) -> Result<Vec<Metrics>, SubjectError> {
+    texture: impl Fn(Vec3, Material) -> [f32; 3],
+) -> Result<Outcome, SubjectError> {
     let body: &BodyModel = subject.body;
-    let rest = BodyPose::rest(body);
     let view = SourceView {
-        pose: rest.clone(),
+        pose: BodyPose::rest(body),
         camera: upper_body_camera(body, 0.0),
         crop: None,
     };
-    let photo = subject.photo(&view.pose, &view.camera, subject_texture)?;
-    let outcome = pipeline.reconstruct(
+    let photo = subject.photo(&view.pose, &view.camera, texture)?;
+    Ok(pipeline.reconstruct(
         Mode::Default(body),
         Photo::Pixels {
             name: subject.name,
@@ -58,7 +59,19 @@ pub fn score(
         },
         Tracked::Given(view),
         &mut |_| true,
-    )?;
+    )?)
+}
+
+/// `subject` reconstructed from its front photo ([`reconstruct_subject`]), then compared at
+/// every [`VIEWS`] entry: one row of metrics each.
+pub fn score(
+    renderer: &mut HeadlessRenderer,
+    pipeline: &mut Pipeline,
+    subject: &Subject,
+) -> Result<Vec<Metrics>, SubjectError> {
+    let body: &BodyModel = subject.body;
+    let rest = BodyPose::rest(body);
+    let outcome = reconstruct_subject(pipeline, subject, subject_texture)?;
     let motion = demo_motion()?;
     let mut wave = rest.clone();
     Retarget::new(&motion, body).sample(&motion, 6.45, &mut wave);

@@ -13,9 +13,9 @@ use glam::Vec3;
 use crate::body::{BodyModel, BodyPose};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
 use crate::eval::metrics::{Metrics, compare, person_box};
-use crate::eval::subjects::SubjectError;
+use crate::eval::subjects::{SubjectError, reconstruct_subject};
 use crate::eval::{interleaved_rgb, render_view};
-use crate::pipeline::{Mode, Photo, Pipeline, Tracked};
+use crate::pipeline::Pipeline;
 use crate::render::{HeadlessRenderer, SplatImage};
 use crate::synthetic::{Subject, seeded_texture, upper_body_camera};
 use crate::tracking::{Retarget, SourceView, demo_motion};
@@ -129,11 +129,29 @@ pub struct Pair {
 }
 
 impl Pair {
+    /// `input` beside `truth` (straight alpha, as [`Subject::photo`] draws it), the same size.
+    pub fn new(input: SplatImage, truth: &image::RgbaImage) -> Self {
+        let n = truth.width() as usize * truth.height() as usize;
+        let (mut target_rgb, mut target_alpha) = (vec![0.0; 3 * n], vec![0.0; n]);
+        for (i, p) in truth.pixels().enumerate() {
+            let a = f32::from(p[3]) / 255.0;
+            target_alpha[i] = a;
+            for c in 0..3 {
+                target_rgb[c * n + i] = f32::from(p[c]) / 255.0 * a;
+            }
+        }
+        Self {
+            input,
+            target_rgb,
+            target_alpha,
+        }
+    }
+
     /// How `image` (the input, or the refiner's output) compares with the truth, as
     /// `guava eval` compares: silhouette IoU, and PSNR, SSIM and L1 over the subject's box.
     /// `None` when the subject is not in view.
     pub fn score(&self, image: &SplatImage) -> Option<Metrics> {
-        let size = SIDE as usize;
+        let size = image.width as usize;
         let bounds = person_box(&self.target_alpha, size)?;
         let n = size * size;
         let truth: Vec<f32> = (0..n)
@@ -150,8 +168,8 @@ impl Pair {
     }
 }
 
-/// The camera of `view` at [`SIDE`]².
-fn camera(body: &BodyModel, view: &View) -> Camera {
+/// The camera of `view` at `side`² (pairs use [`SIDE`]).
+pub fn camera(body: &BodyModel, view: &View, side: u32) -> Camera {
     let front = upper_body_camera(body, 0.0);
     let eye = front.view_from_world.inverse().transform_point3(Vec3::ZERO);
     let target = Vec3::new(0.0, eye.y, 0.0);
@@ -164,7 +182,7 @@ fn camera(body: &BodyModel, view: &View) -> Camera {
     );
     Camera::guava(
         Camera::look_at(target + distance * dir, target, Vec3::Y),
-        SIDE,
+        side,
         GUAVA_INVTANFOV,
     )
 }
@@ -181,22 +199,7 @@ pub fn make(
     let subject = subject(spec.kind, body);
     let texture = seeded_texture(spec.seed);
     let rest = BodyPose::rest(body);
-    let source = SourceView {
-        pose: rest.clone(),
-        camera: upper_body_camera(body, 0.0),
-        crop: None,
-    };
-    let photo = subject.photo(&source.pose, &source.camera, &texture)?;
-    let outcome = pipeline.reconstruct(
-        Mode::Default(body),
-        Photo::Pixels {
-            name: subject.name,
-            pixels: photo,
-            has_alpha: true,
-        },
-        Tracked::Given(source),
-        &mut |_| true,
-    )?;
+    let outcome = reconstruct_subject(pipeline, &subject, &texture)?;
     let motion = demo_motion()?;
     let retarget = Retarget::new(&motion, body);
     for view in &spec.views {
@@ -206,28 +209,12 @@ pub fn make(
         }
         let at = SourceView {
             pose,
-            camera: camera(body, view),
+            camera: camera(body, view, SIDE),
             crop: None,
         };
         let input = render_view(renderer, &outcome.avatar, body, &at)?;
         let truth = subject.photo(&at.pose, &at.camera, &texture)?;
-        let n = (SIDE * SIDE) as usize;
-        let (mut target_rgb, mut target_alpha) = (vec![0.0; 3 * n], vec![0.0; n]);
-        for (i, p) in truth.pixels().enumerate() {
-            let a = f32::from(p[3]) / 255.0;
-            target_alpha[i] = a;
-            for c in 0..3 {
-                target_rgb[c * n + i] = f32::from(p[c]) / 255.0 * a;
-            }
-        }
-        each(
-            view,
-            Pair {
-                input,
-                target_rgb,
-                target_alpha,
-            },
-        );
+        each(view, Pair::new(input, &truth));
     }
     Ok(())
 }

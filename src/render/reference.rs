@@ -169,8 +169,15 @@ pub fn render(
         }
     }
     stats.visible = splats.len() as u64;
-    // Per-tile lists in (depth, index) order: the stable sort of the reference's 64-bit keys.
-    splats.sort_by(|a, b| a.depth.total_cmp(&b.depth).then(a.index.cmp(&b.index)));
+    // Per-tile lists in (depth, index) order: the stable sort of the reference's 64-bit keys,
+    // whose depth half is the f32 view depth — so depths that round to the same f32 are ties
+    // broken by index, as there (sorting by the f64 depth ordered the discs of an avatar's
+    // sheets differently and put 0.29 of colour between the passes at some pixels).
+    splats.sort_by(|a, b| {
+        (a.depth as f32)
+            .total_cmp(&(b.depth as f32))
+            .then(a.index.cmp(&b.index))
+    });
     let (tiles_x, tiles_y) = super::tile_grid(camera);
     let mut tile_lists: Vec<Vec<usize>> = vec![Vec::new(); (tiles_x * tiles_y) as usize];
     for (k, s) in splats.iter().enumerate() {

@@ -6,6 +6,7 @@ mod args;
 mod bench;
 mod photo;
 mod refiner;
+mod report;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
@@ -83,6 +84,10 @@ enum Command {
         #[arg(long)]
         ehm: Option<PathBuf>,
     },
+    /// Measure this machine: error against run time over the quality knobs (with the Pareto
+    /// front), stability on extreme inputs, and what leaving work out saves; writes report.md,
+    /// CSVs and an SVG plot to --out.
+    Report(report::ReportArgs),
     /// Write the default refiner's training or held-out pairs (synthetic subjects reconstructed
     /// from a front photo, seen from other views and poses, beside their ground truth) as NumPy
     /// arrays for tools/train_refiner.py.
@@ -338,6 +343,7 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::SynthPhoto { out, yaw, subject } => photo::synth_photo(&out, yaw, subject),
+        Command::Report(args) => report::report(&args),
         Command::RefinerPairs { out, split } => refiner::write_pairs(
             &out,
             match split {

@@ -24,7 +24,7 @@ pub struct BodyBenchArgs {
     pub ehm: std::path::PathBuf,
 }
 
-pub(super) fn cpu_name() -> String {
+pub fn cpu_name() -> String {
     std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|s| {

@@ -8,7 +8,7 @@ mod reconstruct;
 mod refiner;
 mod splat;
 
-pub use body::{BodyBenchArgs, body};
+pub use body::{BodyBenchArgs, body, cpu_name};
 pub use fidelity::{FidelityBenchArgs, fidelity};
 pub use frame::{FrameBenchArgs, frame};
 pub use guava_mode::{GuavaBenchArgs, guava};
