@@ -70,17 +70,8 @@ fn the_silhouette_stage_recovers_a_known_shape_and_pose() {
         .collect();
 
     // The keypoint stage's report: the true body's keypoints, exactly where it puts them.
-    let names = [
-        "nose",
-        "left_eye",
-        "right_eye",
-        "left_ear",
-        "right_ear",
-        "left_shoulder",
-        "right_shoulder",
-        "left_elbow",
-        "right_elbow",
-    ];
+    // COCO's head, shoulders and elbows.
+    let names = &guava::body::COCO_KEYPOINTS[..9];
     let marks = body.landmark_positions(&posed.vertices);
     let surface: Vec<_> = names
         .iter()

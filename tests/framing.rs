@@ -38,15 +38,7 @@ fn fitted_in_photo(
 
 /// The keypoints the portrait shows well inside its edges. Elbows, hips and knees lie at or past
 /// its bottom edge, where the pose model guesses and the fit extrapolates them.
-const SEEN: [&str; 7] = [
-    "nose",
-    "left_eye",
-    "right_eye",
-    "left_ear",
-    "right_ear",
-    "left_shoulder",
-    "right_shoulder",
-];
+const SEEN: &[&str] = guava::body::COCO_KEYPOINTS.split_at(7).0;
 
 /// Reframed, the fit lands where it lands on the portrait alone: the head's points within 8 px
 /// and the shoulders (inside the suit's bulk) within 15 px, of a 512 px portrait. The two fits

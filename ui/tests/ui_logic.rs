@@ -52,18 +52,12 @@ fn nothing_changes_nothing_renders() {
     for _ in 0..10 {
         frame(&mut h);
     }
-    let before = h.state().report().renders;
-    assert!(before >= 1, "the scene was rendered at least once");
-    for _ in 0..10 {
-        frame(&mut h);
-    }
-    assert_eq!(
-        h.state().report().renders,
-        before,
-        "an unchanged view must not re-run the splatting pass"
+    assert!(
+        h.state().report().renders >= 1,
+        "the scene was rendered at least once"
     );
+    let orbit = frames_without_splatting(&mut h, 10, "an unchanged view");
     // Moving the camera does re-run it.
-    let orbit = h.state().report().renders;
     h.state_mut().set_yaw_deg(30.0);
     frame(&mut h);
     assert_eq!(
@@ -119,16 +113,8 @@ fn the_default_body_is_shown_and_re_posed_only_when_a_slider_moves() {
     for _ in 0..5 {
         frame(&mut h);
     }
-    let before = h.state().report().renders;
-    assert!(before >= 1, "the mesh view was drawn");
-    for _ in 0..5 {
-        frame(&mut h);
-    }
-    assert_eq!(
-        h.state().report().renders,
-        before,
-        "an unchanged pose is not redrawn"
-    );
+    assert!(h.state().report().renders >= 1, "the mesh view was drawn");
+    let before = frames_without_splatting(&mut h, 5, "an unchanged pose");
     let body = h.state_mut().body_mut().expect("default body");
     let model = body.model.clone();
     body.pose
@@ -167,6 +153,42 @@ fn turning_a_joint_splats_once(h: &mut Harness<'static, GuavaApp>, joint: &str, 
         before + 1,
         "a pose change splats once"
     );
+}
+
+/// Draws `n` frames and checks that none re-ran the splatting pass; returns the render count.
+fn frames_without_splatting(h: &mut Harness<'static, GuavaApp>, n: usize, what: &str) -> u64 {
+    let before = h.state().report().renders;
+    for _ in 0..n {
+        frame(h);
+    }
+    assert_eq!(
+        h.state().report().renders,
+        before,
+        "{what} must not re-splat"
+    );
+    before
+}
+
+/// The viewer showing the synthetic photo's avatar (the known-answer demo).
+fn synthetic_avatar() -> Harness<'static, GuavaApp> {
+    let mut h = harness(Options::default());
+    h.run();
+    h.state_mut().reconstruct_synthetic_photo();
+    wait_until(&mut h, |app| app.avatar_info().is_some());
+    h
+}
+
+/// Presses in the viewport (right of the side panel) and moves, drawing a frame per step: an
+/// orbit drag still held; returns where the pointer is, to release it there.
+fn drag_in_viewport(h: &mut Harness<'static, GuavaApp>) -> egui::Pos2 {
+    let at = egui::pos2(900.0, 350.0);
+    h.hover_at(at);
+    h.drag_at(at);
+    for dx in [10.0, 20.0, 30.0] {
+        h.hover_at(at + egui::vec2(dx, 0.0));
+        frame(h);
+    }
+    at + egui::vec2(30.0, 0.0)
 }
 
 /// Steps the app until `done` holds or 30 s pass (loading runs on a worker thread).
@@ -655,28 +677,18 @@ fn ehm_trackers_keypoint_models_place_the_fits_points() {
 /// is released; an avatar is drawn as its coarse stand-in meanwhile (one splat per triangle).
 #[test]
 fn dragging_draws_at_reduced_resolution_and_settles_at_full() {
-    let mut h = harness(Options::default());
-    h.run();
-    h.state_mut().reconstruct_synthetic_photo();
-    wait_until(&mut h, |app| app.avatar_info().is_some());
+    let mut h = synthetic_avatar();
     for _ in 0..3 {
         frame(&mut h);
     }
     let full = h.state().report().rendered_size;
     let rigs = h.state().report().rigs;
     assert!(full[0] > 300 && full[1] > 300, "{full:?}");
-    // Press in the viewport (right of the side panel) and move: an orbit drag.
-    let at = egui::pos2(900.0, 350.0);
-    h.hover_at(at);
-    h.drag_at(at);
-    for dx in [10.0, 20.0, 30.0] {
-        h.hover_at(at + egui::vec2(dx, 0.0));
-        frame(&mut h);
-    }
+    let end = drag_in_viewport(&mut h);
     let half = full.map(|side| (side as f32 * 0.5).round() as u32);
     assert_eq!(h.state().report().rendered_size, half, "while dragging");
     assert!(h.state().report().rigs > rigs, "the stand-in is rigged");
-    h.drop_at(at + egui::vec2(30.0, 0.0));
+    h.drop_at(end);
     for _ in 0..3 {
         frame(&mut h);
     }
@@ -688,31 +700,14 @@ fn dragging_draws_at_reduced_resolution_and_settles_at_full() {
 /// splatting again; while the user drags, the raw splat image is drawn and no refining happens.
 #[test]
 fn the_settled_view_is_refined_and_a_drag_shows_the_raw_splat() {
-    let mut h = harness(Options::default());
-    h.run();
-    h.state_mut().reconstruct_synthetic_photo();
-    wait_until(&mut h, |app| app.avatar_info().is_some());
+    let mut h = synthetic_avatar();
     wait_until(&mut h, |app| app.refined_frames() > 0);
     assert_eq!(h.state().refined_frames(), 1);
     frame(&mut h);
-    let renders = h.state().report().renders;
-    for _ in 0..3 {
-        frame(&mut h);
-    }
-    assert_eq!(
-        h.state().report().renders,
-        renders,
-        "the refined frame stays; nothing re-splats"
-    );
+    let renders = frames_without_splatting(&mut h, 3, "the refined frame");
     assert_eq!(h.state().refined_frames(), 1);
 
-    let at = egui::pos2(900.0, 350.0);
-    h.hover_at(at);
-    h.drag_at(at);
-    for dx in [10.0, 20.0, 30.0] {
-        h.hover_at(at + egui::vec2(dx, 0.0));
-        frame(&mut h);
-    }
+    let end = drag_in_viewport(&mut h);
     assert!(
         h.state().report().renders > renders,
         "the raw splat is drawn while dragging"
@@ -722,7 +717,7 @@ fn the_settled_view_is_refined_and_a_drag_shows_the_raw_splat() {
         1,
         "nothing refined while dragging"
     );
-    h.drop_at(at + egui::vec2(30.0, 0.0));
+    h.drop_at(end);
     wait_until(&mut h, |app| app.refined_frames() > 1);
     assert_eq!(
         h.state().refined_frames(),
