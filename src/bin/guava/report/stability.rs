@@ -178,13 +178,8 @@ pub fn run(
         ("field of view 0.5°", 0.5f32),
         ("field of view 175°", 175.0),
     ] {
-        let eye = Vec3::new(0.0, 1.2, 4.0);
-        let camera = Camera::from_fov_y(
-            Camera::look_at(eye, Vec3::new(0.0, 1.2, 0.0), Vec3::Y),
-            256,
-            256,
-            fov.to_radians(),
-        );
+        // From where the photo's camera stands, aimed at the chest.
+        let camera = Camera::from_fov_y(front.view_from_world, 256, 256, fov.to_radians());
         cases.push(avatar_case(name, rest.clone(), camera));
     }
     let mut nan = rest.clone();
