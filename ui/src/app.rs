@@ -256,6 +256,11 @@ impl GuavaApp {
         self.scene.as_ref().map(|s| s.cloud.len())
     }
 
+    /// Whether a file is loading or waiting to load.
+    pub fn busy(&self) -> bool {
+        self.job.is_some() || !self.queue.is_empty()
+    }
+
     pub fn status(&self) -> Option<&str> {
         self.status.as_ref().map(|(s, _)| s.as_str())
     }
