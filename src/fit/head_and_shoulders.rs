@@ -12,6 +12,9 @@ use crate::keypoints::{FaceLandmarks, Keypoint};
 
 /// The chin's face-mesh point.
 const CHIN: usize = 152;
+/// Pose-model shoulders both this many eye spans above the face mesh's chin are another reading
+/// (on a drawn head the pose model put them on the cheeks, about one span above it).
+const SHOULDERS_ABOVE_CHIN_EYE_SPANS: f32 = 0.5;
 /// A pose-model nose further than this many eye spans from the face mesh's is another reading.
 const NOSE_AGREES_EYE_SPANS: f32 = 0.5;
 
@@ -76,11 +79,17 @@ pub fn contradicts(keypoints: &[Keypoint], face: &FaceLandmarks) -> Option<Strin
     if seen("nose").is_some_and(|n| n.distance(nose) > NOSE_AGREES_EYE_SPANS * span) {
         return Some("the pose model's nose is not the face's".into());
     }
-    ["left_shoulder", "right_shoulder"]
+    // Both, and clearly: one raised shoulder, or a head bent down over it (the cameraman,
+    // looking into his camera), is a body, not a misreading.
+    let shoulders: Vec<Vec2> = ["left_shoulder", "right_shoulder"]
         .into_iter()
         .filter_map(seen)
-        .any(|s| s.y < chin.y)
-        .then(|| "the pose model's shoulders are above the chin".into())
+        .collect();
+    (shoulders.len() == 2
+        && shoulders
+            .iter()
+            .all(|s| s.y < chin.y - SHOULDERS_ABOVE_CHIN_EYE_SPANS * span))
+    .then(|| "the pose model's shoulders are above the chin".into())
 }
 
 /// The COCO head and shoulder keypoints of `face` (source pixels of a `side`² image), the
