@@ -706,6 +706,12 @@ fn the_settled_view_is_refined_and_a_drag_shows_the_raw_splat() {
     frame(&mut h);
     let renders = frames_without_splatting(&mut h, 3, "the refined frame");
     assert_eq!(h.state().refined_frames(), 1);
+    // The splatting view keeps its frame under the refined one, so its counters reach the HUD
+    // (they did not when the refined frame replaced it before they came back).
+    assert!(
+        h.state().report().stats.is_some(),
+        "splat stats reach the HUD"
+    );
 
     let end = drag_in_viewport(&mut h);
     assert!(

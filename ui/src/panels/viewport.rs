@@ -89,12 +89,10 @@ impl GuavaApp {
             ui.ctx().request_repaint_after(SETTLE);
         }
         let camera = self.view_camera(w, h);
-        if !interacting && let Some(texture) = self.refined_frame(ui.ctx(), &content, camera) {
-            let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
-            ui.painter().image(texture, rect, uv, egui::Color32::WHITE);
-            self.demo_hint(ui, rect);
-            return;
-        }
+        let refined = match interacting {
+            true => None,
+            false => self.refined_frame(ui.ctx(), &content, camera),
+        };
         let frame = Frame {
             content,
             camera,
@@ -111,6 +109,12 @@ impl GuavaApp {
         };
         ui.painter()
             .add(egui_wgpu::Callback::new_paint_callback(rect, callback));
+        // The refined frame covers the splat it was made from. The splatting view still gets its
+        // frame: unchanged, it draws nothing new, and its counters keep reaching the HUD.
+        if let Some(texture) = refined {
+            let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+            ui.painter().image(texture, rect, uv, egui::Color32::WHITE);
+        }
         self.demo_hint(ui, rect);
     }
 
