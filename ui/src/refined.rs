@@ -1,6 +1,6 @@
 //! The refiner pass in the viewer: once the view settles (no drag, no playback), the avatar is
 //! drawn again off screen at the viewport's size, refined by the default refiner (ONNX Runtime
-//! on the CPU, a worker thread) and shown in place of the raw splat image until anything changes.
+//! on the CPU, a worker thread) and drawn over the raw splat image until anything changes.
 //! While the user drags or plays the raw splat is shown: the refiner is left out of those frames.
 
 use std::sync::mpsc::{Receiver, TryRecvError};
