@@ -26,7 +26,7 @@ use crate::avatar::Avatar;
 use crate::body::{BodyModel, EhmIdentity, EhmModel, Posable};
 use crate::fit::{FitError, fit_detections, fit_ehm_detections, fit_silhouette};
 use crate::guava_mode::{GuavaModels, reconstruct_guava, uv_map};
-use crate::keypoints::Landmarkers;
+use crate::keypoints::{Detections, Landmarkers};
 use crate::photo::{PhotoError, SOURCE_SIZE, SourceImage};
 use crate::progress::{Stage, StageClock};
 use crate::reconstruct::{DEFAULT_UV_SIZE, ReconstructError, UvMap, reconstruct_default};
@@ -135,6 +135,15 @@ pub struct Source {
     /// The tracking file's EHM skeleton (GUAVA mode builds the body with it).
     pub ehm_identity: Option<EhmIdentity>,
     pub report: Report,
+}
+
+/// `image` masked by its alpha, else by the pose model's person segmentation in `detections`:
+/// what an avatar is made from and compared with.
+fn with_person_mask(mut image: SourceImage, detections: Option<&Detections>) -> SourceImage {
+    if let (None, Some(d)) = (&image.mask, detections) {
+        image.apply_mask(person_mask(&d.pose, image.size));
+    }
+    image
 }
 
 /// A finished reconstruction.
@@ -337,10 +346,7 @@ impl Pipeline {
             mut report,
         } = source;
         let segmentation = read.detections.as_ref().map(|d| &d.pose);
-        let mut photo = read.image;
-        if let (None, Some(pose)) = (&photo.mask, segmentation) {
-            photo.apply_mask(person_mask(pose, photo.size));
-        }
+        let photo = with_person_mask(read.image, read.detections.as_ref());
         let (avatar, core) = match mode {
             Mode::Default(body) => {
                 let uv = self.uv_map(body.name(), body.vertex_count(), DEFAULT_UV_SIZE, || {
@@ -455,11 +461,7 @@ impl Pipeline {
             })?)
         };
         let read = SourcePhoto::from_pixels(pixels, has_alpha, &file, square, models, progress)?;
-        let mut image = read.image;
-        if let (None, Some(d)) = (&image.mask, &read.detections) {
-            image.apply_mask(person_mask(&d.pose, image.size));
-        }
-        Ok(image)
+        Ok(with_person_mask(read.image, read.detections.as_ref()))
     }
 
     /// The keypoint models, loaded (for callers that run them without reconstructing).
