@@ -371,6 +371,21 @@ fn reconstruct_in_guava_mode_with_exported_networks() {
     assert!(image::open(&png).is_ok(), "a PNG was written");
     let (ok, _, stderr) = render(None);
     assert!(!ok && stderr.contains("ehm_synthetic"), "{stderr}");
+    // Refined by GUAVA's refiner from its networks folder, which --refine alone asks for.
+    let refined = dir.join("p_refined.png");
+    let (avatar, image) = (path(&out), path(&refined));
+    let refine = ["render", "--avatar", &avatar, "--ehm", ehm, "--out", &image, "--refine"];
+    let (ok, _, stderr) = guava(&refine);
+    assert!(!ok && stderr.contains("--guava-models"), "{stderr}");
+    let mut with_models = refine.to_vec();
+    with_models.extend(["--guava-models", "tests/data/guava_onnx"]);
+    let (ok, _, stderr) = guava(&with_models);
+    assert!(ok, "{stderr}");
+    assert_ne!(
+        image::open(&refined).expect("refined PNG").to_rgb8(),
+        image::open(&png).expect("raw PNG").to_rgb8(),
+        "the refiner changed the frame"
+    );
 
     // A folder without the models: one error naming the folder and each missing file.
     let (ok, _, stderr) = run(args(&path(&dir)));

@@ -8,6 +8,8 @@ use glam::Vec3;
 use guava::guava_mode::{GuavaModels, GuavaModelsError, models::FILES};
 use guava::npz::Npz;
 use guava::onnx::OnnxRuntime;
+use guava::refine::{Refiner, RefinerKind};
+use guava::render::SplatImage;
 
 fn models_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/guava_onnx")
@@ -102,6 +104,51 @@ fn exported_networks_match_pytorch_within_1e4_relative() {
     check("uv_decoder.out.scales", &uv.scales);
     check("uv_decoder.out.rotations", &uv.rotations);
     check("uv_decoder.out.local_pos", &uv.local_pos);
+
+    // GUAVA's refiner, through the frame path's own loader, at its own side (no resampling).
+    let mut refiner = Refiner::load(runtime(), &models.refiner_path()).expect("refiner loads");
+    assert_eq!(
+        refiner.kind,
+        RefinerKind::Guava {
+            channels: d.colors,
+            side: d.features
+        }
+    );
+    let side = d.features as u32;
+    let mut splat = SplatImage::new(side, side, d.colors);
+    splat.features = array("refiner.in.splat");
+    splat.alpha = vec![1.0; splat.alpha.len()];
+    let refined = refiner.refine(&splat).expect("refiner runs");
+    check("refiner.out.rgb", &refined.features);
+}
+
+#[test]
+fn guava_refiner_refuses_another_avatars_channels_and_letterboxes_other_frames() {
+    let mut refiner = Refiner::load(runtime(), &models_dir().join(FILES[3].1)).expect("loads");
+    let RefinerKind::Guava { channels, .. } = refiner.kind else {
+        panic!("GUAVA's refiner, by its metadata");
+    };
+    // A default-mode avatar's frame (RGB and confidence) is refused with the file named.
+    let message = refiner
+        .refine(&SplatImage::new(40, 24, 4))
+        .err()
+        .expect("4 channels refused")
+        .to_string();
+    assert!(
+        message.contains("guava_refiner.onnx") && message.contains(&format!("{channels} channels")),
+        "{message}"
+    );
+    // A wide frame comes back at its own size, finite, with its alpha.
+    let mut frame = SplatImage::new(48, 20, channels);
+    for (i, v) in frame.features.iter_mut().enumerate() {
+        *v = ((i * 7919) % 97) as f32 / 97.0;
+    }
+    frame.alpha.iter_mut().for_each(|a| *a = 0.5);
+    let refined = refiner.refine(&frame).expect("letterboxed");
+    assert_eq!((refined.width, refined.height, refined.channels), (48, 20, 3));
+    assert_eq!(refined.features.len(), 3 * 48 * 20);
+    assert!(refined.features.iter().all(|v| v.is_finite()));
+    assert_eq!(refined.alpha, frame.alpha);
 }
 
 fn problems(dir: &Path) -> Vec<String> {
@@ -128,7 +175,8 @@ fn a_folder_missing_models_names_every_missing_file() {
         found,
         [
             format!("{}: missing", FILES[0].1),
-            format!("{}: missing", FILES[2].1)
+            format!("{}: missing", FILES[2].1),
+            format!("{}: missing", FILES[3].1)
         ],
     );
     let message = GuavaModels::load_dir(runtime(), &dir)
@@ -145,6 +193,7 @@ fn swapped_or_broken_models_are_named() {
     // The encoder saved under the UV decoder's name, the vertex decoder truncated to half.
     std::fs::copy(models_dir().join(FILES[0].1), dir.join(FILES[0].1)).expect("copy");
     std::fs::copy(models_dir().join(FILES[0].1), dir.join(FILES[2].1)).expect("copy");
+    std::fs::copy(models_dir().join(FILES[3].1), dir.join(FILES[3].1)).expect("copy");
     let bytes = std::fs::read(models_dir().join(FILES[1].1)).expect("read");
     std::fs::write(dir.join(FILES[1].1), &bytes[..bytes.len() / 2]).expect("write");
     let found = problems(&dir);

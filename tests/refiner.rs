@@ -74,7 +74,10 @@ fn wrong_models_and_images_are_clear_errors() {
     let err = refiner
         .refine(&SplatImage::new(8, 8, 3))
         .expect_err("refused");
-    assert!(matches!(err, RefineError::Channels(3)), "{err}");
+    assert!(
+        matches!(err, RefineError::Channels { channels: 3, .. }),
+        "{err}"
+    );
     // Any size: padded to the network's multiple of 4 and cropped back.
     let out = refiner
         .refine(&SplatImage::new(37, 21, 4))

@@ -1,4 +1,4 @@
-"""GUAVA mode's networks as three ONNX models, built from the authors' code (Apache-2.0).
+"""GUAVA mode's networks as four ONNX models, built from the authors' code (Apache-2.0).
 
     guava_encoder.onnx         image [1,3,S,S] in [0,1] (S = 518)
                                -> pixel_features [1,3+F,R,R]  (the image resized to R ‖ f_map1)
@@ -9,6 +9,8 @@
                                -> colors [1,N,C], opacities [1,N,1], scales [1,N,3], rotations [1,N,4]
     guava_uv_decoder.onnx      uv_features [1,3+F,U,U], uv_style [1,E], cam_dir [1,3]
                                -> colors [1,U,U,C], opacities, scales, rotations, local_pos
+    guava_refiner.onnx         splat [1,C,R,R] (the splatting pass's C channels on black)
+                               -> rgb [1,3,R,R] in [0,1] (GaussianRenderer's StyleUNet refiner)
 
 The split follows where the Rust side has to work between the networks (models/UbodyAvatar/
 ubody_gaussian.py, Ubody_Gaussian_inferer.forward): projecting the posed body to sample
@@ -16,13 +18,14 @@ ubody_gaussian.py, Ubody_Gaussian_inferer.forward): projecting the posed body to
 face visibility. Learned constants ride inside the models (vertex_base_feature in the vertex
 decoder, uv_base_feature in the UV decoder), and so does the camera-direction harmonic embedding;
 `cam_dir` is the camera's z axis in world coordinates (get_cam_dirs: the third column of the
-world-to-camera rotation). The UV StyleUNet's noise inputs are zero: the reference draws fresh
+world-to-camera rotation). The two StyleUNets' noise inputs are zero: the reference draws fresh
 noise every call, which no two runs (and no parity test) can share; zero is its mean.
 
 Two sources of weights:
 
     --checkpoint CKPT   the official checkpoint (torch.load(CKPT)['model'], the inferer's state
-                        dict; DINOv2 ViT-B/14 weights are inside it under dino_encoder.dino_model)
+                        dict; DINOv2 ViT-B/14 weights are inside it under dino_encoder.dino_model;
+                        ['render_model'], the renderer's, holds the refiner under nerual_refiner.)
     --random SEED       randomly initialised networks with reduced widths (--reduced, the test
                         fixture: small files; the architecture is the reference's, only channel
                         counts and sizes shrink)
@@ -55,6 +58,7 @@ FILES = {
     "encoder": "guava_encoder.onnx",
     "vertex_decoder": "guava_vertex_decoder.onnx",
     "uv_decoder": "guava_uv_decoder.onnx",
+    "refiner": "guava_refiner.onnx",
 }
 
 # GUAVA's configuration (configs/train/ubody_512.yaml, ubody_gaussian.py) and the reduced one.
@@ -149,9 +153,30 @@ def build(cfg, guava):
     net.uv_base_feature = nn.Parameter(torch.randn(32, cfg["uv"], cfg["uv"]))
     net.uv_point_decoder = UV_Point_GS_Decoder(in_dim=cfg["uv_out"] + 32, dir_dim=27,
                                                color_out_dim=cfg["color"])
-    for name, buffer in net.uv_feature_decoder.stylegan_decoder.noises.named_buffers():
-        buffer.zero_()
+    # GaussianRenderer's refiner (assets/GUAVA/config.yaml, styleunet: small, sigmoid output). Not
+    # part of the inferer; built last so the other networks' random weights stay as they were.
+    net.refiner = StyleUNet(
+        in_size=cfg["render"], out_size=cfg["render"], in_dim=cfg["color"], out_dim=3,
+        num_style_feat=cfg["style_feat"], num_mlp=cfg["style_mlp"],
+        channel_scale=cfg["channel_scale"], small=True)
+    zero_noise(net)
     return net
+
+
+def zero_noise(net):
+    """Both StyleUNets' noise as zeros (the mean of the noise the reference draws per call). The
+    small generator (the refiner's) runs one noisy convolution per level, but its stored buffers
+    are sized for two (level i gets 2**((i + 5) // 2) instead of 2**(i + 2)), so the reference's
+    randomize_noise=False fails there: its buffers are replaced by zeros of the sizes it uses."""
+    import torch
+
+    for unet, small in ((net.uv_feature_decoder, False), (net.refiner, True)):
+        g = unet.stylegan_decoder
+        for i in range(g.num_layers):
+            side = getattr(g.noises, f"noise{i}").shape[-1]
+            if small and i <= g.log_size - 2:
+                side = 2 ** (i + 2)
+            g.noises.register_buffer(f"noise{i}", torch.zeros(1, 1, side, side))
 
 
 def check_vit(vit, cfg):
@@ -259,6 +284,14 @@ def wrappers(net, cfg):
             d = self.net.uv_point_decoder(x, harmonic(cam_dir))
             return d["colors"], d["opacities"], d["scales"], d["rotations"], d["local_pos"]
 
+    class Refiner(nn.Module):
+        def __init__(self):
+            super().__init__()
+            self.net = net
+
+        def forward(self, splat):
+            return self.net.refiner(splat, randomize_noise=False)
+
     s, r, u = cfg["image"], cfg["render"], cfg["uv"]
     gen = torch.Generator().manual_seed(1)
     cam = torch.tensor([[0.3, -0.2, 0.9]])
@@ -275,6 +308,10 @@ def wrappers(net, cfg):
             "uv_features": torch.randn(1, cfg["dino_out"] + 3, u, u, generator=gen) * uv_mask,
             "uv_style": torch.randn(1, cfg["style"], generator=gen),
             "cam_dir": cam}, ["colors", "opacities", "scales", "rotations", "local_pos"]),
+        # A splat image: features where the avatar covers (alpha-weighted), black elsewhere.
+        "refiner": (Refiner(), {
+            "splat": torch.randn(1, cfg["color"], r, r, generator=gen)
+            * (torch.rand(1, 1, r, r, generator=gen) > 0.4).float()}, ["rgb"]),
     }
 
 
@@ -327,8 +364,11 @@ def main():
     weights.add_argument("--checkpoint", help="GUAVA's checkpoint (its 'model' state dict)")
     weights.add_argument("--random", type=int, metavar="SEED", help="random weights")
     parser.add_argument("--reduced", action="store_true", help="reduced widths (with --random)")
-    parser.add_argument("--out", required=True, help="folder for the three .onnx files")
+    parser.add_argument("--out", required=True, help="folder for the four .onnx files")
     parser.add_argument("--fixture", help="also save inputs and PyTorch outputs here (.npz)")
+    parser.add_argument("--only", choices=list(FILES), action="append",
+                        help="export only this model (repeatable), e.g. GUAVA's full-size "
+                             "refiner with random weights for `guava bench refiner`")
     parser.add_argument("--check-vit", action="store_true",
                         help="only check our DINOv2 ViT against transformers.Dinov2Model, then exit")
     args = parser.parse_args()
@@ -348,14 +388,27 @@ def main():
         check_vit(net.dino_encoder.dino_model, cfg)
         return
     if args.checkpoint:
-        state = torch.load(args.checkpoint, map_location="cpu", weights_only=False)["model"]
-        wanted = net.state_dict()
+        checkpoint = torch.load(args.checkpoint, map_location="cpu", weights_only=False)
+        state = checkpoint["model"]
+        wanted = {k for k in net.state_dict() if not k.startswith("refiner.")}
         found = {k: v for k, v in state.items() if k in wanted}
         missing = sorted(set(wanted) - set(found))
         if missing:
             sys.exit(f"{args.checkpoint}: the 'model' state dict lacks {len(missing)} of the "
                      f"networks' parameters, first {missing[:5]}")
-        net.load_state_dict(found)
+        net.load_state_dict(found, strict=False)
+        render = checkpoint.get("render_model", {})
+        prefix = "nerual_refiner."  # sic, the reference's spelling
+        noise = "stylegan_decoder.noises."  # replaced by zeros below
+        refiner = {k[len(prefix):]: v for k, v in render.items()
+                   if k.startswith(prefix) and not k.startswith(prefix + noise)}
+        missing = sorted(k for k in net.refiner.state_dict()
+                         if k not in refiner and not k.startswith(noise))
+        if missing:
+            sys.exit(f"{args.checkpoint}: the 'render_model' state dict lacks {len(missing)} of "
+                     f"the refiner's parameters, first {missing[:5]}")
+        net.refiner.load_state_dict(refiner, strict=False)
+        zero_noise(net)  # the checkpoint's stored noise buffers loaded above are not used
         source = f"checkpoint {Path(args.checkpoint).name}"
     else:
         source = f"random weights, seed {args.random}" + (", reduced widths" if args.reduced else "")
@@ -365,6 +418,8 @@ def main():
     fixture = {}
     original_resize = tvf.resize
     for role, (model, inputs, names) in wrappers(net, cfg).items():
+        if args.only and role not in args.only:
+            continue
         path = out / FILES[role]
         with torch.no_grad():
             expected = model(**inputs)  # the reference's own resize

@@ -1,7 +1,7 @@
-//! GUAVA's networks as the three ONNX models `tools/export_guava_onnx.py` writes, loaded from a
+//! GUAVA's networks as the four ONNX models `tools/export_guava_onnx.py` writes, loaded from a
 //! folder the user picks and checked against one interface before anything runs: every file
-//! present, written by this exporter version, and its inputs and outputs of the shapes the other
-//! two agree on. Sizes are read from the models (GUAVA's: a 518² image, 512² features and UV map,
+//! present, written by this exporter version, and its inputs and outputs of the shapes the others
+//! agree on. The refiner is only checked here; [`crate::refine::Refiner`] runs it per frame. Sizes are read from the models (GUAVA's: a 518² image, 512² features and UV map,
 //! 32 channels), so the reduced test models run through the same code.
 
 use std::collections::BTreeMap;
@@ -14,18 +14,25 @@ use crate::onnx::{OnnxError, OnnxRuntime, Session, TensorF32};
 /// The exporter's format; a model with another is refused (re-export it).
 pub const FORMAT: &str = "1";
 
-/// The three models, by role, and their file names in the folder.
-pub const FILES: [(Role, &str); 3] = [
+/// The four models, by role, and their file names in the folder.
+pub const FILES: [(Role, &str); 4] = [
     (Role::Encoder, "guava_encoder.onnx"),
     (Role::VertexDecoder, "guava_vertex_decoder.onnx"),
     (Role::UvDecoder, "guava_uv_decoder.onnx"),
+    (Role::Refiner, REFINER_FILE),
 ];
+
+/// GUAVA's refiner (its StyleUNet: the splat image's channels → RGB) in the folder.
+pub const REFINER_FILE: &str = "guava_refiner.onnx";
+/// The `guava_rs.role` the exporter gives the refiner.
+pub const REFINER_ROLE: &str = "refiner";
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Role {
     Encoder,
     VertexDecoder,
     UvDecoder,
+    Refiner,
 }
 
 impl Role {
@@ -35,6 +42,7 @@ impl Role {
             Role::Encoder => "encoder",
             Role::VertexDecoder => "vertex_decoder",
             Role::UvDecoder => "uv_decoder",
+            Role::Refiner => REFINER_ROLE,
         }
     }
 
@@ -105,6 +113,11 @@ fn interface(role: Role) -> (Tensors, Tensors) {
                 ("local_pos", &[Is(1), Named('U'), Named('U'), Is(3)]),
             ],
         ),
+        // GUAVA renders and refines at its feature side (512²).
+        Role::Refiner => (
+            &[("splat", &[Is(1), Named('C'), Named('R'), Named('R')])],
+            &[("rgb", &[Is(1), Is(3), Named('R'), Named('R')])],
+        ),
     }
 }
 
@@ -149,7 +162,7 @@ pub struct Dims {
     pub colors: usize,
 }
 
-/// Checks the three models' declarations against the interface the exporter writes and against
+/// Checks the four models' declarations against the interface the exporter writes and against
 /// each other; every problem found, each naming its file.
 pub fn check(infos: &BTreeMap<Role, ModelInfo>) -> Result<Dims, Vec<String>> {
     let mut problems = Vec::new();
@@ -291,7 +304,8 @@ pub struct GuavaModels {
 }
 
 impl GuavaModels {
-    /// Loads and checks the three models in `dir`; one error lists everything missing or wrong.
+    /// Loads and checks the four models in `dir`; one error lists everything missing or wrong.
+    /// The refiner's session is dropped after the check (the frame path loads its own).
     pub fn load_dir(runtime: &OnnxRuntime, dir: &Path) -> Result<Self, GuavaModelsError> {
         let mut problems = Vec::new();
         let mut sessions = BTreeMap::new();
@@ -332,6 +346,11 @@ impl GuavaModels {
             source,
             dir: dir.to_path_buf(),
         })
+    }
+
+    /// GUAVA's refiner in the folder (checked with the others when the folder loaded).
+    pub fn refiner_path(&self) -> PathBuf {
+        self.dir.join(REFINER_FILE)
     }
 
     /// Runs the encoder on an [`Dims::image`]² RGB image in [0, 1], planar (all R, then G, B).
@@ -511,6 +530,18 @@ mod tests {
             problems[1]
                 .starts_with("guava_uv_decoder.onnx: input \"uv_features\" dimension 1 is 36")
                 && problems[1].contains("guava_encoder.onnx output \"pixel_features\" makes it 35"),
+            "{problems:?}"
+        );
+    }
+
+    #[test]
+    fn a_refiner_for_other_channels_is_named() {
+        let mut infos = declared(guava_sizes);
+        infos.get_mut(&Role::Refiner).expect("declared").inputs[0].1[1] = 96;
+        let problems = check(&infos).expect_err("must be refused");
+        assert_eq!(problems.len(), 1, "{problems:?}");
+        assert!(
+            problems[0].starts_with("guava_refiner.onnx: input \"splat\" dimension 1 is 96"),
             "{problems:?}"
         );
     }

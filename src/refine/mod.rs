@@ -1,14 +1,22 @@
-//! The refiner pass: the splatting pass's feature image turned into the final picture by a small
-//! convolutional network, as GUAVA's StyleUNet turns its 32 channels into RGB. The default mode's
-//! refiner (`assets/refiner/default_refiner.onnx`, trained by `tools/train_refiner.py` on
-//! [`pairs`]) reads RGB, the source-confidence channel and alpha, and gives RGB and alpha
-//! (premultiplied, on black), so it can also clean the silhouette. It runs through ONNX Runtime
-//! on the CPU: the splat image is read back, refined and composited.
+//! The refiner pass: the splatting pass's feature image turned into the final picture by a
+//! convolutional network. Two kinds, told apart by the model file:
+//! - the default mode's refiner (`assets/refiner/default_refiner.onnx`, trained by
+//!   `tools/train_refiner.py` on [`pairs`]) reads RGB, the source-confidence channel and alpha at
+//!   any size, and gives RGB and alpha (premultiplied, on black), so it can also clean the
+//!   silhouette;
+//! - GUAVA's StyleUNet (`guava_refiner.onnx` from `tools/export_guava_onnx.py`) reads all of the
+//!   avatar's channels at its fixed square side (512²) and gives RGB on black (trained so: GUAVA
+//!   renders on a black background); the splat's alpha composites it. Other frame sizes are
+//!   letterboxed into its square and resampled (bilinear) there and back.
+//!
+//! Both run through ONNX Runtime on the CPU: the splat image is read back, refined and composited.
 
 pub mod pairs;
 
 use std::path::{Path, PathBuf};
 
+use crate::avatar::AvatarKind;
+use crate::guava_mode::models::{REFINER_FILE, REFINER_ROLE};
 use crate::onnx::{OnnxError, OnnxRuntime, Session, TensorF32};
 use crate::render::SplatImage;
 
@@ -18,7 +26,7 @@ pub const DEFAULT_REFINER: &str = concat!(
     "/assets/refiner/default_refiner.onnx"
 );
 
-/// The network's input: [1, 5, H, W] — R, G, B, source confidence, alpha.
+/// The default refiner's input: [1, 5, H, W] — R, G, B, source confidence, alpha.
 pub const INPUT: &str = "splat";
 /// Its output: [1, 4, H, W] — R, G, B (premultiplied), alpha.
 pub const OUTPUT: &str = "refined";
@@ -26,6 +34,8 @@ pub const INPUT_CHANNELS: usize = 5;
 pub const OUTPUT_CHANNELS: usize = 4;
 /// Sides are padded to a multiple of this (the network halves the image twice).
 pub const MULTIPLE: u32 = 4;
+/// GUAVA's refiner's output: [1, 3, S, S], RGB in [0, 1] on black (its input is [`INPUT`]).
+pub const GUAVA_OUTPUT: &str = "rgb";
 
 #[derive(Debug, thiserror::Error)]
 pub enum RefineError {
@@ -33,65 +43,124 @@ pub enum RefineError {
     Onnx(#[from] OnnxError),
     #[error("{path}: {problem}")]
     Model { path: PathBuf, problem: String },
-    #[error(
-        "the refiner reads RGB and the source-confidence channel: this image has {0} channels \
-         (GUAVA mode's 32-channel refiner is not exported yet)"
-    )]
-    Channels(usize),
+    #[error("{path}: the refiner reads {wanted}; this image has {channels} channels")]
+    Channels {
+        path: PathBuf,
+        wanted: String,
+        channels: usize,
+    },
+}
+
+/// Which network, and what it reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RefinerKind {
+    /// The default mode's: RGB, confidence, alpha at any size.
+    Default,
+    /// GUAVA's StyleUNet: `channels` feature channels at `side`².
+    Guava { channels: usize, side: usize },
 }
 
 /// A loaded refiner network.
 pub struct Refiner {
     session: Session,
-    /// What the model file says it is (its `description` metadata), for the UI and reports.
+    pub kind: RefinerKind,
+    pub path: PathBuf,
+    /// What the model file says it is, for the UI and reports.
     pub description: String,
 }
 
 impl Refiner {
-    /// Loads and checks the model at `path`.
+    /// Loads and checks the model at `path`: GUAVA's if the exporter marked it so, else the
+    /// default kind.
     pub fn load(runtime: &OnnxRuntime, path: &Path) -> Result<Self, RefineError> {
         let session = runtime.session(path)?;
         let problem = |problem: String| RefineError::Model {
             path: path.to_path_buf(),
             problem,
         };
-        let channels = |shapes: Vec<(String, Vec<i64>)>, name: &str| {
-            shapes
-                .into_iter()
-                .find(|(n, _)| n == name)
-                .and_then(|(_, shape)| shape.get(1).copied())
+        let shape = |shapes: Vec<(String, Vec<i64>)>, name: &str| {
+            shapes.into_iter().find(|(n, _)| n == name).map(|(_, s)| s)
         };
-        match channels(session.input_shapes(), INPUT) {
-            Some(c) if c == INPUT_CHANNELS as i64 => {}
-            other => {
-                return Err(problem(format!(
-                    "input `{INPUT}` should have {INPUT_CHANNELS} channels, has {other:?}"
-                )));
+        let input = shape(session.input_shapes(), INPUT);
+        let guava = session.metadata("guava_rs.role").as_deref() == Some(REFINER_ROLE);
+        let (kind, description) = if guava {
+            let output = shape(session.output_shapes(), GUAVA_OUTPUT);
+            let kind = match (input.as_deref(), output.as_deref()) {
+                (Some(&[1, c, h, w]), Some(&[1, 3, oh, ow]))
+                    if c >= 3 && h > 0 && h == w && (oh, ow) == (h, w) =>
+                {
+                    RefinerKind::Guava {
+                        channels: c as usize,
+                        side: h as usize,
+                    }
+                }
+                (i, o) => {
+                    return Err(problem(format!(
+                        "GUAVA's refiner should read `{INPUT}` [1, C, S, S] and give                          `{GUAVA_OUTPUT}` [1, 3, S, S] (fixed S); it declares {i:?} and {o:?}"
+                    )));
+                }
+            };
+            let source = session
+                .metadata("guava_rs.source")
+                .unwrap_or_else(|| "unknown weights".into());
+            (kind, format!("GUAVA's refiner ({source})"))
+        } else {
+            let channels = |s: Option<Vec<i64>>| s.and_then(|s| s.get(1).copied());
+            match channels(input) {
+                Some(c) if c == INPUT_CHANNELS as i64 => {}
+                other => {
+                    return Err(problem(format!(
+                        "input `{INPUT}` should have {INPUT_CHANNELS} channels, has {other:?}"
+                    )));
+                }
             }
-        }
-        match channels(session.output_shapes(), OUTPUT) {
-            Some(c) if c == OUTPUT_CHANNELS as i64 => {}
-            other => {
-                return Err(problem(format!(
-                    "output `{OUTPUT}` should have {OUTPUT_CHANNELS} channels, has {other:?}"
-                )));
+            match channels(shape(session.output_shapes(), OUTPUT)) {
+                Some(c) if c == OUTPUT_CHANNELS as i64 => {}
+                other => {
+                    return Err(problem(format!(
+                        "output `{OUTPUT}` should have {OUTPUT_CHANNELS} channels, has {other:?}"
+                    )));
+                }
             }
-        }
-        let description = session
-            .metadata("description")
-            .unwrap_or_else(|| "refiner".into());
+            let description = session
+                .metadata("description")
+                .unwrap_or_else(|| "refiner".into());
+            (RefinerKind::Default, description)
+        };
         Ok(Self {
             session,
+            kind,
+            path: path.to_path_buf(),
             description,
         })
     }
 
-    /// `image` (rendered on black, at least RGB and confidence) refined: RGB premultiplied and
-    /// alpha; its depth is kept.
+    /// `image` (rendered on black) refined: RGB premultiplied and alpha; its depth is kept.
     pub fn refine(&mut self, image: &SplatImage) -> Result<SplatImage, RefineError> {
-        if image.channels < 4 {
-            return Err(RefineError::Channels(image.channels));
-        }
+        let wrong = |wanted: String| RefineError::Channels {
+            path: self.path.clone(),
+            wanted,
+            channels: image.channels,
+        };
+        let mut refined = match self.kind {
+            RefinerKind::Default if image.channels < 4 => {
+                return Err(wrong(
+                    "RGB and the source-confidence channel (a default-mode avatar)".into(),
+                ));
+            }
+            RefinerKind::Guava { channels, .. } if image.channels != channels => {
+                return Err(wrong(format!(
+                    "{channels} channels (an avatar from the same GUAVA networks)"
+                )));
+            }
+            RefinerKind::Default => self.refine_default(image)?,
+            RefinerKind::Guava { side, .. } => self.refine_guava(image, side)?,
+        };
+        refined.inv_depth.clone_from(&image.inv_depth);
+        Ok(refined)
+    }
+
+    fn refine_default(&mut self, image: &SplatImage) -> Result<SplatImage, RefineError> {
         let (w, h) = (image.width as usize, image.height as usize);
         let (pw, ph) = (padded(image.width), padded(image.height));
         let mut input = vec![0.0f32; INPUT_CHANNELS * pw * ph];
@@ -128,11 +197,154 @@ impl Refiner {
                 target[y * w..(y + 1) * w].copy_from_slice(&out[at..at + w]);
             }
         }
-        refined.inv_depth.clone_from(&image.inv_depth);
         Ok(refined)
+    }
+
+    fn refine_guava(&mut self, image: &SplatImage, side: usize) -> Result<SplatImage, RefineError> {
+        let (w, h) = (image.width as usize, image.height as usize);
+        let square = Letterbox::new(w, h, side);
+        let mut input = Vec::with_capacity(image.channels * side * side);
+        for c in 0..image.channels {
+            square.to_square(image.plane(c), &mut input);
+        }
+        let outputs = self.session.run(vec![(
+            INPUT,
+            TensorF32 {
+                shape: vec![1, image.channels, side, side],
+                data: input,
+            },
+        )])?;
+        let out = &outputs[0].data;
+        let mut refined = SplatImage::new(image.width, image.height, 3);
+        refined.features.clear();
+        for c in 0..3 {
+            square.from_square(&out[c * side * side..(c + 1) * side * side], &mut refined.features);
+        }
+        refined.alpha.clone_from(&image.alpha);
+        Ok(refined)
+    }
+}
+
+/// The refiner an avatar is refined by: the default one for default reconstructions, GUAVA's
+/// from the networks folder it was made with for GUAVA-mode avatars.
+pub fn refiner_for(kind: AvatarKind, networks: Option<&Path>) -> Result<PathBuf, String> {
+    match (kind, networks) {
+        (AvatarKind::DefaultReconstruction, _) => Ok(PathBuf::from(DEFAULT_REFINER)),
+        (AvatarKind::Guava, Some(dir)) => Ok(dir.join(REFINER_FILE)),
+        (AvatarKind::Guava, None) => Err(
+            "a GUAVA-mode avatar is refined by GUAVA's refiner: give the networks folder it was \
+             reconstructed with"
+                .into(),
+        ),
     }
 }
 
 fn padded(side: u32) -> usize {
     side.div_ceil(MULTIPLE) as usize * MULTIPLE as usize
+}
+
+/// A `w`×`h` frame centred in a square of side max(w, h), which maps onto `side`² (the same
+/// frame at GUAVA's size needs no resampling).
+struct Letterbox {
+    w: usize,
+    h: usize,
+    side: usize,
+    /// Frame pixels per square pixel, and the frame's offset in the square (frame pixels).
+    scale: f32,
+    offset: [f32; 2],
+}
+
+impl Letterbox {
+    fn new(w: usize, h: usize, side: usize) -> Self {
+        let m = w.max(h);
+        Self {
+            w,
+            h,
+            side,
+            scale: m as f32 / side as f32,
+            offset: [(m - w) as f32 / 2.0, (m - h) as f32 / 2.0],
+        }
+    }
+
+    /// Appends `plane` (the frame's) resampled into the square; outside the frame is black.
+    fn to_square(&self, plane: &[f32], out: &mut Vec<f32>) {
+        for v in 0..self.side {
+            for u in 0..self.side {
+                let x = (u as f32 + 0.5) * self.scale - 0.5 - self.offset[0];
+                let y = (v as f32 + 0.5) * self.scale - 0.5 - self.offset[1];
+                out.push(bilinear(plane, self.w, self.h, x, y));
+            }
+        }
+    }
+
+    /// Appends `square` (side²) resampled back onto the frame.
+    fn from_square(&self, square: &[f32], out: &mut Vec<f32>) {
+        for y in 0..self.h {
+            for x in 0..self.w {
+                let u = (x as f32 + self.offset[0] + 0.5) / self.scale - 0.5;
+                let v = (y as f32 + self.offset[1] + 0.5) / self.scale - 0.5;
+                let clamp = |t: f32| t.clamp(0.0, (self.side - 1) as f32);
+                out.push(bilinear(square, self.side, self.side, clamp(u), clamp(v)));
+            }
+        }
+    }
+}
+
+/// `plane` (w×h) at (x, y) in pixel-centre coordinates, bilinear; zero outside.
+fn bilinear(plane: &[f32], w: usize, h: usize, x: f32, y: f32) -> f32 {
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let at = |xi: f32, yi: f32| {
+        if xi < 0.0 || yi < 0.0 || xi >= w as f32 || yi >= h as f32 {
+            0.0
+        } else {
+            plane[yi as usize * w + xi as usize]
+        }
+    };
+    let top = at(x0, y0) * (1.0 - fx) + at(x0 + 1.0, y0) * fx;
+    let bottom = at(x0, y0 + 1.0) * (1.0 - fx) + at(x0 + 1.0, y0 + 1.0) * fx;
+    top * (1.0 - fy) + bottom * fy
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp(w: usize, h: usize) -> Vec<f32> {
+        (0..w * h)
+            .map(|i| (i % w) as f32 * 0.01 + (i / w) as f32 * 0.02)
+            .collect()
+    }
+
+    #[test]
+    fn a_frame_at_the_refiners_side_passes_unchanged() {
+        let plane = ramp(16, 16);
+        let square = Letterbox::new(16, 16, 16);
+        let (mut there, mut back) = (Vec::new(), Vec::new());
+        square.to_square(&plane, &mut there);
+        square.from_square(&there, &mut back);
+        assert_eq!(there, plane);
+        assert_eq!(back, plane);
+    }
+
+    #[test]
+    fn a_wide_frame_is_centred_in_the_square_and_comes_back() {
+        // 32×16 into 16²: half scale, rows 4..12 of the square hold the frame, black around it.
+        let (w, h) = (32, 16);
+        let plane = ramp(w, h);
+        let square = Letterbox::new(w, h, 16);
+        let mut there = Vec::new();
+        square.to_square(&plane, &mut there);
+        assert!(there[..16 * 3].iter().all(|&v| v == 0.0), "black above");
+        assert!(there[16 * 13..].iter().all(|&v| v == 0.0), "black below");
+        let mut back = Vec::new();
+        square.from_square(&there, &mut back);
+        // A linear ramp survives bilinear down- and upsampling away from the frame's border.
+        for y in 2..h - 2 {
+            for x in 2..w - 2 {
+                let (got, want) = (back[y * w + x], plane[y * w + x]);
+                assert!((got - want).abs() < 1e-4, "({x}, {y}): {got} vs {want}");
+            }
+        }
+    }
 }

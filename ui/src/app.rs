@@ -81,6 +81,8 @@ pub enum CameraMode {
 /// GUAVA mode's networks, shared with reconstruction workers (a session runs one call at a time).
 pub(crate) struct Networks {
     pub models: Arc<Mutex<GuavaModels>>,
+    /// The folder (its refiner refines GUAVA-mode avatars).
+    pub dir: std::path::PathBuf,
     /// The folder and where its weights came from, shown in the panel.
     pub label: String,
 }

@@ -428,6 +428,7 @@ impl GuavaApp {
         );
         self.info(label.clone());
         self.networks = Some(Networks {
+            dir: models.dir.clone(),
             models: Arc::new(std::sync::Mutex::new(models)),
             label,
         });

@@ -1,6 +1,7 @@
 //! The refiner pass in the viewer: once the view settles (no drag, no playback), the avatar is
-//! drawn again off screen at the viewport's size, refined by the default refiner (ONNX Runtime
-//! on the CPU, a worker thread) and drawn over the raw splat image until anything changes.
+//! drawn again off screen at the viewport's size, refined by its refiner (the default one, or
+//! GUAVA's for GUAVA-mode avatars; ONNX Runtime on the CPU, a worker thread) and drawn over the
+//! raw splat image until anything changes.
 //! While the user drags or plays the raw splat is shown: the refiner is left out of those frames.
 
 use std::sync::mpsc::{Receiver, TryRecvError};
@@ -9,7 +10,7 @@ use std::time::Instant;
 
 use guava::camera::Camera;
 use guava::onnx::OnnxRuntime;
-use guava::refine::{DEFAULT_REFINER, Refiner};
+use guava::refine::Refiner;
 use guava::render::view::{AvatarRef, PoseRef};
 
 use crate::offscreen::OffscreenRenderer;
@@ -17,6 +18,8 @@ use crate::offscreen::OffscreenRenderer;
 /// What a refined frame shows: it is current while all of this is unchanged.
 #[derive(Clone, PartialEq)]
 pub struct RefineKey {
+    /// The refiner model's file.
+    pub refiner: std::path::PathBuf,
     pub avatar: u64,
     pub pose: u64,
     pub camera: Camera,
@@ -40,6 +43,8 @@ pub struct RefinedView {
     /// The last refined frame's cost, and the last error (shown in the display panel).
     pub last_ms: Option<f32>,
     pub error: Option<String>,
+    /// Why the avatar on screen has no refiner to run (shown in the display panel).
+    pub unavailable: Option<String>,
     /// Refined frames shown so far.
     pub frames: u64,
 }
@@ -53,6 +58,7 @@ impl Default for RefinedView {
             shown: None,
             last_ms: None,
             error: None,
+            unavailable: None,
             frames: 0,
         }
     }
@@ -123,12 +129,9 @@ fn refine(
 ) -> Result<Refined, String> {
     let started = Instant::now();
     let mut refiner = refiner.lock().unwrap_or_else(|e| e.into_inner());
-    if refiner.is_none() {
+    if refiner.as_ref().is_none_or(|r| r.path != key.refiner) {
         let runtime = OnnxRuntime::load().map_err(|e| e.to_string())?;
-        *refiner = Some(
-            Refiner::load(runtime, std::path::Path::new(DEFAULT_REFINER))
-                .map_err(|e| e.to_string())?,
-        );
+        *refiner = Some(Refiner::load(runtime, &key.refiner).map_err(|e| e.to_string())?);
     }
     let image = offscreen
         .lock()

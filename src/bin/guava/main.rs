@@ -54,9 +54,14 @@ enum Command {
         /// photo's camera (512², as GUAVA renders).
         #[arg(long)]
         tracked_camera: bool,
-        /// Run the default refiner on the splat image (default-mode avatars).
+        /// Run the avatar's refiner on the splat image: the default refiner for default-mode
+        /// avatars, GUAVA's (from --guava-models) for GUAVA-mode ones.
         #[arg(long, requires = "avatar")]
         refine: bool,
+        /// With --refine: GUAVA's networks folder (tools/export_guava_onnx.py), whose refiner a
+        /// GUAVA-mode avatar is refined by.
+        #[arg(long, requires = "refine")]
+        guava_models: Option<PathBuf>,
         #[arg(long)]
         out: PathBuf,
         /// Image size in pixels (1 to 8192).
@@ -251,6 +256,7 @@ fn run(cli: Cli) -> Result<()> {
             source_pose,
             tracked_camera,
             refine,
+            guava_models,
             out,
             width,
             height,
@@ -260,6 +266,7 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             // Avatars stand on a y-up body; splat files use GUAVA's y-down axes.
             let is_avatar = avatar.is_some();
+            let mut refiner = None;
             let (cloud, name, tracked) = match (ply, avatar) {
                 (Some(ply), _) => {
                     let cloud = guava::gaussians::read_file(&ply)?;
@@ -267,14 +274,11 @@ fn run(cli: Cli) -> Result<()> {
                 }
                 (None, Some(avatar)) => {
                     let avatar_file = guava::avatar::Avatar::load(&avatar)?;
-                    if refine
-                        && avatar_file.kind != guava::avatar::AvatarKind::DefaultReconstruction
-                    {
-                        anyhow::bail!(
-                            "{}: --refine runs the default refiner, for default-mode avatars \
-                             (GUAVA's own refiner is not exported yet)",
-                            avatar.display()
-                        );
+                    if refine {
+                        let path =
+                            guava::refine::refiner_for(avatar_file.kind, guava_models.as_deref())
+                                .map_err(|e| anyhow::anyhow!("{}: {e} (--guava-models)", avatar.display()))?;
+                        refiner = Some(path);
                     }
                     let posing = match (motion.as_deref(), source_pose) {
                         (Some(m), _) => Posing::Motion(m, time),
@@ -325,10 +329,9 @@ fn run(cli: Cli) -> Result<()> {
             let mut renderer = HeadlessRenderer::new(GpuContext::headless()?);
             let background = vec![0.0; cloud.channels];
             let (mut image, stats) = renderer.render(&cloud, &camera, &background)?;
-            if refine {
+            if let Some(path) = refiner {
                 let runtime = guava::onnx::OnnxRuntime::load()?;
-                let path = std::path::Path::new(guava::refine::DEFAULT_REFINER);
-                image = guava::refine::Refiner::load(runtime, path)?.refine(&image)?;
+                image = guava::refine::Refiner::load(runtime, &path)?.refine(&image)?;
             }
             guava::render::save_png(&image.to_rgb8(), &out)?;
             println!(

@@ -47,9 +47,10 @@ impl GuavaApp {
         }
         ui.checkbox(&mut self.refined.enabled, "refine when the view settles")
             .on_hover_text(
-                "the default refiner (a small network trained on synthetic subjects) turns a \
-                 default-mode avatar's splat image into the picture once you stop dragging or \
-                 playing; the raw splat image is shown meanwhile",
+                "the avatar's refiner turns its splat image into the picture once you stop \
+                 dragging or playing (the default refiner, a small network trained on synthetic \
+                 subjects, for default reconstructions; GUAVA's, from its networks folder, for \
+                 GUAVA-mode avatars); the raw splat image is shown meanwhile",
             );
         if let Some(ms) = self.refined.last_ms {
             ui.label(format!(
@@ -58,6 +59,9 @@ impl GuavaApp {
         }
         if let Some(e) = &self.refined.error {
             ui.colored_label(ui.visuals().error_fg_color, format!("refiner off: {e}"));
+        }
+        if let Some(why) = &self.refined.unavailable {
+            ui.colored_label(ui.visuals().warn_fg_color, format!("not refined: {why}"));
         }
         ui.horizontal(|ui| {
             ui.label("background");

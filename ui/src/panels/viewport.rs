@@ -139,7 +139,7 @@ impl GuavaApp {
         }
     }
 
-    /// The refined frame of a default-mode avatar shown in colour, once ready (see
+    /// The refined frame of an avatar shown in colour, once ready (see
     /// [`crate::refined`]); `None` while it is made, or when the refiner does not apply.
     fn refined_frame(
         &mut self,
@@ -147,6 +147,7 @@ impl GuavaApp {
         content: &Content,
         camera: guava::camera::Camera,
     ) -> Option<egui::TextureId> {
+        self.refined.unavailable = None;
         let Content::Avatar {
             avatar,
             pose,
@@ -158,12 +159,19 @@ impl GuavaApp {
         };
         let colour = self.display.mode == guava::render::present::PresentMode::Rgb
             && self.display.rgb_channels == [0, 1, 2];
-        let default_mode = avatar.avatar.kind == guava::avatar::AvatarKind::DefaultReconstruction;
         let offscreen = self.gpu.offscreen.as_ref()?;
-        if !(self.refined.enabled && colour && default_mode) {
+        if !(self.refined.enabled && colour) {
             return None;
         }
+        let networks = self.networks.as_ref().map(|n| n.dir.as_path());
+        let refiner = guava::refine::refiner_for(avatar.avatar.kind, networks);
+        self.refined.unavailable = refiner
+            .as_ref()
+            .err()
+            .map(|e| format!("{e} (Mode panel > Networks folder…)"));
+        let refiner = refiner.ok()?;
         let key = RefineKey {
+            refiner,
             avatar: avatar.id,
             pose: pose.id,
             camera,

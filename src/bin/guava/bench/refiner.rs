@@ -23,6 +23,10 @@ pub struct RefinerBenchArgs {
     /// The refiner model (default: the shipped default refiner).
     #[arg(long)]
     model: Option<PathBuf>,
+    /// Also time GUAVA's refiner (`guava_refiner.onnx`; full size with random weights from
+    /// `tools/export_guava_onnx.py --random 0 --only refiner`) per frame at its own side.
+    #[arg(long)]
+    guava_refiner: Option<PathBuf>,
 }
 
 #[derive(Default)]
@@ -157,5 +161,37 @@ pub fn refiner(args: &RefinerBenchArgs) -> anyhow::Result<()> {
             median(refine)
         );
     }
+    if let Some(path) = &args.guava_refiner {
+        guava_refiner(path)?;
+    }
+    Ok(())
+}
+
+/// GUAVA's refiner per frame at its own side (no resampling), on a deterministic feature image
+/// (the network's cost does not depend on the values).
+fn guava_refiner(path: &std::path::Path) -> anyhow::Result<()> {
+    let mut refiner = Refiner::load(OnnxRuntime::load()?, path)?;
+    let guava::refine::RefinerKind::Guava { channels, side } = refiner.kind else {
+        anyhow::bail!("{}: not GUAVA's refiner (its metadata)", path.display());
+    };
+    let mut image = SplatImage::new(side as u32, side as u32, channels);
+    for (i, v) in image.features.iter_mut().enumerate() {
+        *v = ((i * 7919) % 1000) as f32 / 1000.0 - 0.5;
+    }
+    image.alpha.fill(1.0);
+    let mut times = Vec::new();
+    for _ in 0..3 {
+        let t = Instant::now();
+        refiner.refine(&image)?;
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    println!(
+        "
+{}: {} at {side}², {channels} channels: {:.0} ms per frame (median of 3, ONNX Runtime \
+         on the CPU)",
+        path.display(),
+        refiner.description,
+        median(times)
+    );
     Ok(())
 }
