@@ -374,7 +374,9 @@ fn reconstruct_in_guava_mode_with_exported_networks() {
     // Refined by GUAVA's refiner from its networks folder, which --refine alone asks for.
     let refined = dir.join("p_refined.png");
     let (avatar, image) = (path(&out), path(&refined));
-    let refine = ["render", "--avatar", &avatar, "--ehm", ehm, "--out", &image, "--refine"];
+    let refine = [
+        "render", "--avatar", &avatar, "--ehm", ehm, "--out", &image, "--refine",
+    ];
     let (ok, _, stderr) = guava(&refine);
     assert!(!ok && stderr.contains("--guava-models"), "{stderr}");
     let mut with_models = refine.to_vec();

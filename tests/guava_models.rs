@@ -145,7 +145,10 @@ fn guava_refiner_refuses_another_avatars_channels_and_letterboxes_other_frames()
     }
     frame.alpha.iter_mut().for_each(|a| *a = 0.5);
     let refined = refiner.refine(&frame).expect("letterboxed");
-    assert_eq!((refined.width, refined.height, refined.channels), (48, 20, 3));
+    assert_eq!(
+        (refined.width, refined.height, refined.channels),
+        (48, 20, 3)
+    );
     assert_eq!(refined.features.len(), 3 * 48 * 20);
     assert!(refined.features.iter().all(|v| v.is_finite()));
     assert_eq!(refined.alpha, frame.alpha);

@@ -205,7 +205,7 @@ impl Refiner {
         let square = Letterbox::new(w, h, side);
         let mut input = Vec::with_capacity(image.channels * side * side);
         for c in 0..image.channels {
-            square.to_square(image.plane(c), &mut input);
+            square.sample_square(image.plane(c), &mut input);
         }
         let outputs = self.session.run(vec![(
             INPUT,
@@ -218,7 +218,10 @@ impl Refiner {
         let mut refined = SplatImage::new(image.width, image.height, 3);
         refined.features.clear();
         for c in 0..3 {
-            square.from_square(&out[c * side * side..(c + 1) * side * side], &mut refined.features);
+            square.sample_frame(
+                &out[c * side * side..(c + 1) * side * side],
+                &mut refined.features,
+            );
         }
         refined.alpha.clone_from(&image.alpha);
         Ok(refined)
@@ -267,7 +270,7 @@ impl Letterbox {
     }
 
     /// Appends `plane` (the frame's) resampled into the square; outside the frame is black.
-    fn to_square(&self, plane: &[f32], out: &mut Vec<f32>) {
+    fn sample_square(&self, plane: &[f32], out: &mut Vec<f32>) {
         for v in 0..self.side {
             for u in 0..self.side {
                 let x = (u as f32 + 0.5) * self.scale - 0.5 - self.offset[0];
@@ -278,7 +281,7 @@ impl Letterbox {
     }
 
     /// Appends `square` (side²) resampled back onto the frame.
-    fn from_square(&self, square: &[f32], out: &mut Vec<f32>) {
+    fn sample_frame(&self, square: &[f32], out: &mut Vec<f32>) {
         for y in 0..self.h {
             for x in 0..self.w {
                 let u = (x as f32 + self.offset[0] + 0.5) / self.scale - 0.5;
@@ -321,8 +324,8 @@ mod tests {
         let plane = ramp(16, 16);
         let square = Letterbox::new(16, 16, 16);
         let (mut there, mut back) = (Vec::new(), Vec::new());
-        square.to_square(&plane, &mut there);
-        square.from_square(&there, &mut back);
+        square.sample_square(&plane, &mut there);
+        square.sample_frame(&there, &mut back);
         assert_eq!(there, plane);
         assert_eq!(back, plane);
     }
@@ -334,11 +337,11 @@ mod tests {
         let plane = ramp(w, h);
         let square = Letterbox::new(w, h, 16);
         let mut there = Vec::new();
-        square.to_square(&plane, &mut there);
+        square.sample_square(&plane, &mut there);
         assert!(there[..16 * 3].iter().all(|&v| v == 0.0), "black above");
         assert!(there[16 * 13..].iter().all(|&v| v == 0.0), "black below");
         let mut back = Vec::new();
-        square.from_square(&there, &mut back);
+        square.sample_frame(&there, &mut back);
         // A linear ramp survives bilinear down- and upsampling away from the frame's border.
         for y in 2..h - 2 {
             for x in 2..w - 2 {

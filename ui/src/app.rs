@@ -289,6 +289,12 @@ impl GuavaApp {
         self.camera_mode = mode;
     }
 
+    /// The orbit camera (what dragging, the camera panel and its presets move).
+    pub fn orbit_mut(&mut self) -> &mut crate::orbit::OrbitCamera {
+        self.camera_mode = CameraMode::Orbit;
+        &mut self.orbit
+    }
+
     /// Turns the orbit camera (what dragging or the yaw slider does).
     pub fn set_yaw_deg(&mut self, yaw: f32) {
         self.orbit.yaw_rad = yaw.to_radians();

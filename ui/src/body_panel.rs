@@ -1,5 +1,6 @@
-//! The body being posed by hand: its model, the pose the sliders edit, and the posed body the
-//! viewport draws (as a mesh, or under an avatar). Re-poses only when the pose changed.
+//! The body being posed: its model, the pose the motion (or the advanced editors) set, the
+//! grouped controls that override it, and the posed body the viewport draws (as a mesh, or
+//! under an avatar). Re-poses only when the resulting pose changed.
 
 use std::sync::Arc;
 
@@ -11,6 +12,7 @@ use guava::render::view::{MeshFrame, PoseRef};
 
 use crate::app::next_id;
 use crate::body_model::{SliderGroup, ViewerBody};
+use crate::pose_controls::PoseControls;
 
 /// Posed positions and normals, shared with the viewport callback without copying.
 type PosedMesh = (Arc<Vec<Vec3>>, Arc<Vec<Vec3>>);
@@ -19,7 +21,10 @@ pub struct BodyState {
     pub model: Arc<ViewerBody>,
     /// Where the model came from, shown in the panel.
     pub label: String,
+    /// The pose the motion writes (and the advanced editors edit), before [`Self::controls`].
     pub pose: BodyPose,
+    /// Face, hands and body controls in people's terms; touched groups override `pose`.
+    pub controls: PoseControls,
     pub shaded: bool,
     pub wireframe: bool,
     selected_joint: usize,
@@ -39,6 +44,11 @@ pub struct BodyState {
 impl BodyState {
     pub fn new(model: ViewerBody, label: String) -> Self {
         let pose = BodyPose::rest(&model);
+        let mut rest = PosedBody::default();
+        if let Err(e) = model.pose(&pose, &mut rest) {
+            log::error!("posing the rest pose failed: {e}");
+        }
+        let controls = PoseControls::for_body(&model, &rest);
         let selected_joint = model.joint_names().position(|n| n == "head").unwrap_or(0);
         Self {
             triangles: Arc::new(model.triangles().to_vec()),
@@ -47,6 +57,7 @@ impl BodyState {
             model: Arc::new(model),
             label,
             pose,
+            controls,
             shaded: true,
             wireframe: false,
             selected_joint,
@@ -82,17 +93,25 @@ impl BodyState {
             })
     }
 
+    /// The pose shown: [`Self::pose`] with the overridden control groups in place.
+    pub fn effective_pose(&self) -> BodyPose {
+        let mut pose = self.pose.clone();
+        self.controls.apply(&mut pose);
+        pose
+    }
+
     fn update(&mut self) {
-        if self.posed_for.as_ref() == Some(&self.pose) {
+        let pose = self.effective_pose();
+        if self.posed_for.as_ref() == Some(&pose) {
             return;
         }
         // In place unless the viewport still holds the last pose.
-        if let Err(e) = self.model.pose(&self.pose, Arc::make_mut(&mut self.posed)) {
+        if let Err(e) = self.model.pose(&pose, Arc::make_mut(&mut self.posed)) {
             log::error!("posing failed: {e}");
             return;
         }
         self.mesh = None;
-        self.posed_for = Some(self.pose.clone());
+        self.posed_for = Some(pose);
         self.pose_id = next_id();
     }
 
@@ -152,10 +171,23 @@ impl BodyState {
         ui.horizontal(|ui| {
             ui.checkbox(&mut self.shaded, "shaded");
             ui.checkbox(&mut self.wireframe, "wireframe");
-            if ui.button("Rest pose").clicked() {
+            if ui
+                .button("Rest pose")
+                .on_hover_text("every joint and parameter at rest, every group reset")
+                .clicked()
+            {
                 self.pose = BodyPose::rest(self.model.as_ref());
+                self.controls.groups.iter_mut().for_each(|g| g.reset());
             }
         });
+        self.controls.ui(ui);
+        egui::CollapsingHeader::new("Any joint or parameter (advanced)")
+            .default_open(false)
+            .show(ui, |ui| self.rig_ui(ui));
+    }
+
+    /// The rig's own joints and parameters, one slider each.
+    fn rig_ui(&mut self, ui: &mut egui::Ui) {
         let model = self.model.clone();
         ui.add(egui::Slider::new(&mut self.pose.translation.y, -2.0..=2.0).text("lift (m)"));
         ui.label("Joint rotation (axis-angle, degrees)");

@@ -12,6 +12,7 @@ pub mod motion;
 mod offscreen;
 pub mod orbit;
 mod panels;
+pub mod pose_controls;
 mod refined;
 mod viewport;
 

@@ -107,8 +107,8 @@ fn the_default_body_is_shown_and_re_posed_only_when_a_slider_moves() {
     let mut h = harness(Options::default());
     h.get_by_label_contains("default body template");
     assert!(
-        h.query_all_by_label("jawOpen").count() >= 1,
-        "expression sliders are shown"
+        h.query_all_by_label("jaw open").count() >= 1,
+        "the face's sliders are shown"
     );
     for _ in 0..5 {
         frame(&mut h);
@@ -730,4 +730,129 @@ fn the_settled_view_is_refined_and_a_drag_shows_the_raw_splat() {
         2,
         "the new view is refined once settled"
     );
+}
+
+/// The shown body's control groups.
+fn controls<'a>(
+    h: &'a mut Harness<'static, GuavaApp>,
+) -> &'a mut guava_ui::pose_controls::PoseControls {
+    &mut h.state_mut().body_mut().expect("body").controls
+}
+
+/// Where a joint of the shown body is, posed.
+fn joint_at(h: &mut Harness<'static, GuavaApp>, name: &str) -> glam::Vec3 {
+    use guava::body::Posable;
+    let body = h.state_mut().body_mut().expect("body");
+    let j = body
+        .model
+        .joint_names()
+        .position(|n| n == name)
+        .expect("joint");
+    body.posed().posed.joints[j].translation.into()
+}
+
+#[test]
+fn grouped_controls_pose_in_peoples_terms_override_the_motion_until_reset() {
+    use guava::body::Posable;
+    let mut h = harness(Options::default());
+    h.run();
+    h.get_by_label_contains("Every group follows the motion");
+    h.get_by_label("Left hand");
+    let names: Vec<String> = controls(&mut h)
+        .groups
+        .iter()
+        .map(|g| g.name.clone())
+        .collect();
+    assert_eq!(names, ["Face", "Left hand", "Right hand", "Body"]);
+
+    // A fist brings the right index fingertip towards the wrist; thumbs up keeps the thumb out.
+    let reach = |h: &mut Harness<'static, GuavaApp>, finger: &str| {
+        joint_at(h, finger).distance(joint_at(h, "wrist.R"))
+    };
+    let (index_open, thumb_open) = (reach(&mut h, "finger2-3.R"), reach(&mut h, "finger1-3.R"));
+    let hand = controls(&mut h)
+        .group_mut("Right hand")
+        .expect("right hand");
+    let fist = hand
+        .presets
+        .iter()
+        .position(|p| p.name == "Fist")
+        .expect("preset");
+    hand.choose(fist);
+    let (index_fist, thumb_fist) = (reach(&mut h, "finger2-3.R"), reach(&mut h, "finger1-3.R"));
+    assert!(
+        index_fist < 0.7 * index_open,
+        "fist: index tip {index_fist:.3} m from the wrist, open {index_open:.3}"
+    );
+    let hand = controls(&mut h)
+        .group_mut("Right hand")
+        .expect("right hand");
+    let up = hand
+        .presets
+        .iter()
+        .position(|p| p.name == "Thumbs up")
+        .expect("preset");
+    hand.choose(up);
+    assert!(reach(&mut h, "finger1-3.R") > thumb_fist.max(0.9 * thumb_open));
+
+    // Waving raises the right hand above the right shoulder; nodding lowers the eyes.
+    let body = controls(&mut h).group_mut("Body").expect("body");
+    let wave = body
+        .presets
+        .iter()
+        .position(|p| p.name == "Wave")
+        .expect("preset");
+    body.choose(wave);
+    assert!(joint_at(&mut h, "wrist.R").y > joint_at(&mut h, "upperarm01.R").y);
+    let eye = joint_at(&mut h, "eye.L");
+    let body = controls(&mut h).group_mut("Body").expect("body");
+    let nod = body
+        .controls
+        .iter_mut()
+        .find(|c| c.name == "head nod °")
+        .expect("nod");
+    nod.value = 30.0;
+    assert!(
+        joint_at(&mut h, "eye.L").y < eye.y - 0.02,
+        "nodding lowers the eyes"
+    );
+
+    // The body group holds its joints while the motion moves on; the face still follows it.
+    let head = {
+        let body = h.state_mut().body_mut().expect("body");
+        body.model
+            .joint_names()
+            .position(|n| n == "head")
+            .expect("head")
+    };
+    let effective = |h: &mut Harness<'static, GuavaApp>| {
+        h.state_mut().body_mut().expect("body").effective_pose()
+    };
+    let held = effective(&mut h).rotations[head];
+    let face_before = effective(&mut h).coefficients.clone();
+    h.state_mut()
+        .motion_mut()
+        .expect("demo motion")
+        .player
+        .seek(6.45);
+    frame(&mut h);
+    let moved = effective(&mut h);
+    assert_eq!(
+        moved.rotations[head], held,
+        "overridden: the motion does not move it"
+    );
+    assert_ne!(
+        moved.coefficients, face_before,
+        "the face follows the motion"
+    );
+    h.get_by_label_contains("Set by hand (overriding the motion): Right hand, Body");
+    // Reset: the head follows the motion again.
+    controls(&mut h).group_mut("Body").expect("body").reset();
+    let body = h.state_mut().body_mut().expect("body");
+    assert_eq!(
+        body.effective_pose().rotations[head],
+        body.pose.rotations[head]
+    );
+    let model = body.model.clone();
+    assert_eq!(model.joint_names().len(), body.pose.rotations.len());
 }

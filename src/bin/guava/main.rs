@@ -277,7 +277,9 @@ fn run(cli: Cli) -> Result<()> {
                     if refine {
                         let path =
                             guava::refine::refiner_for(avatar_file.kind, guava_models.as_deref())
-                                .map_err(|e| anyhow::anyhow!("{}: {e} (--guava-models)", avatar.display()))?;
+                                .map_err(|e| {
+                                anyhow::anyhow!("{}: {e} (--guava-models)", avatar.display())
+                            })?;
                         refiner = Some(path);
                     }
                     let posing = match (motion.as_deref(), source_pose) {

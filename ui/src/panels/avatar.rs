@@ -78,7 +78,7 @@ impl GuavaApp {
             return;
         };
         let view = SourceView {
-            pose: body.pose.clone(),
+            pose: body.effective_pose(),
             camera: source.view.camera,
             crop: source.view.crop,
         };

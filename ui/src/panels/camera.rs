@@ -6,6 +6,14 @@ use guava::camera::Camera;
 use crate::app::{CameraMode, GuavaApp, View};
 use crate::orbit::OrbitCamera;
 
+/// Orbit presets around the subject: its front, three-quarter, side and back (yaw, degrees).
+const VIEWS: [(&str, f32); 4] = [
+    ("Front", 0.0),
+    ("Three-quarter", 35.0),
+    ("Side", 90.0),
+    ("Back", 180.0),
+];
+
 impl GuavaApp {
     pub(crate) fn camera_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("Camera");
@@ -24,11 +32,21 @@ impl GuavaApp {
                     .on_hover_text("the motion's tracked camera, following the timeline");
             });
         });
+        let mut moved = false;
+        ui.horizontal(|ui| {
+            for (name, yaw_deg) in VIEWS {
+                if ui.button(name).clicked() {
+                    self.orbit.yaw_rad = yaw_deg.to_radians();
+                    self.orbit.pitch_rad = 0.0;
+                    moved = true;
+                }
+            }
+        });
         let o = &mut self.orbit;
         let mut yaw = o.yaw_rad.to_degrees();
         let mut pitch = o.pitch_rad.to_degrees();
         let mut fov = o.fov_y_rad.to_degrees();
-        let mut moved = ui
+        moved |= ui
             .add(egui::Slider::new(&mut yaw, -180.0..=180.0).text("yaw °"))
             .changed();
         moved |= ui
