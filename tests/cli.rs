@@ -511,6 +511,82 @@ fn eval_prints_the_metrics_of_a_known_answer() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `guava render --sequence`: the whole motion at --fps (frames decode, at the asked size) and an
+/// animated GIF of as many frames; a still pose's turntable turns; bad rates are refused.
+#[test]
+fn render_sequence_writes_every_frame_along_the_camera_path() {
+    let dir = std::env::temp_dir().join(format!("guava-cli-sequence-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let s = |p: &std::path::Path| p.display().to_string();
+    let (photo, avatar) = (dir.join("s.png"), dir.join("s.guava"));
+    let (ok, _, stderr) = guava(&["synth-photo", "--out", &s(&photo)]);
+    assert!(ok, "{stderr}");
+    let (ok, _, stderr) = guava(&["reconstruct", "--image", &s(&photo), "--out", &s(&avatar)]);
+    assert!(ok, "{stderr}");
+    let (frames, gif) = (dir.join("frames"), dir.join("m.gif"));
+    let small = ["--width", "48", "--height", "64"];
+    let avatar_s = s(&avatar);
+    let mut args = vec!["render", "--avatar", &avatar_s];
+    args.extend(small);
+    let (avatar_args, frames_s, gif_s) = (args.clone(), s(&frames), s(&gif));
+    args.extend([
+        "--motion",
+        "assets/demo_motion.json",
+        "--sequence",
+        &frames_s,
+        "--fps",
+        "2",
+        "--camera-path",
+        "turntable",
+        "--gif",
+        &gif_s,
+    ]);
+    let (ok, stdout, stderr) = guava(&args);
+    assert!(ok, "{stderr}");
+    // The demo motion lasts 8 s: 0, 0.5, …, 8 s.
+    assert!(stdout.contains("17 frames at 2 fps"), "{stdout}");
+    let mut files: Vec<_> = std::fs::read_dir(&frames)
+        .expect("frames")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 17, "{files:?}");
+    for f in &files {
+        let image = image::open(f).expect("a whole PNG");
+        assert_eq!((image.width(), image.height()), (48, 64));
+    }
+    use image::AnimationDecoder;
+    let decoder = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(
+        std::fs::File::open(&gif).expect("gif"),
+    ))
+    .expect("a GIF");
+    assert_eq!(decoder.into_frames().count(), 17);
+
+    // A still pose's turntable: --frames frames, and the view turns.
+    let still = dir.join("still");
+    let still_s = s(&still);
+    let mut args = avatar_args.clone();
+    args.extend([
+        "--sequence",
+        &still_s,
+        "--frames",
+        "4",
+        "--camera-path",
+        "turntable",
+    ]);
+    let (ok, _, stderr) = guava(&args);
+    assert!(ok, "{stderr}");
+    let frame = |i: usize| image::open(still.join(format!("frame_{i:05}.png"))).expect("frame");
+    assert_ne!(frame(0).to_rgb8(), frame(1).to_rgb8(), "a quarter turn");
+    assert!(!still.join("frame_00004.png").exists());
+
+    let mut args = avatar_args;
+    args.extend(["--sequence", &still_s, "--fps", "0"]);
+    let (ok, _, stderr) = guava(&args);
+    assert!(!ok && stderr.contains("frame rate"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `guava report --quick` on this machine's adapter: every file is written, every number in its
 /// tables is finite, the Pareto front is not empty and every stability case passes (no timing
 /// is asserted).

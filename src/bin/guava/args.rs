@@ -41,6 +41,28 @@ pub fn seconds(s: &str) -> Result<f64, String> {
     }
 }
 
+/// Frames per second of a written sequence: above 0, at most 240.
+pub fn frame_rate(s: &str) -> Result<f32, String> {
+    let fps = finite(s)?;
+    if fps > 0.0 && fps <= 240.0 {
+        Ok(fps)
+    } else {
+        Err(format!(
+            "{fps} fps: a frame rate is above 0 and at most 240"
+        ))
+    }
+}
+
+/// Frames of a sequence: 1 to 100,000.
+pub fn frame_count(s: &str) -> Result<usize, String> {
+    let n: usize = s.parse().map_err(|e| format!("{e}"))?;
+    if (1..=100_000).contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!("{n} frames: a sequence has 1 to 100000"))
+    }
+}
+
 fn finite(s: &str) -> Result<f32, String> {
     let v: f32 = s.parse().map_err(|e| format!("{e}"))?;
     if v.is_finite() {

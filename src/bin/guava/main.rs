@@ -6,13 +6,12 @@ mod args;
 mod bench;
 mod photo;
 mod refiner;
+mod render;
 mod report;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::{Parser, Subcommand};
-use guava::camera::Camera;
 use guava::gpu::GpuContext;
-use guava::render::HeadlessRenderer;
 use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
@@ -30,54 +29,9 @@ struct Cli {
 enum Command {
     /// Print the GPU adapter, its limits, and whether ONNX Runtime loads.
     Info,
-    /// Render a 3DGS .ply file or an avatar to a PNG, framed by an orbit camera.
-    Render {
-        /// A splat file: 3DGS PLY (standard or PlayCanvas's compressed layout) or antimatter15's .splat
-        #[arg(long, required_unless_present = "avatar", conflicts_with = "avatar")]
-        ply: Option<PathBuf>,
-        /// An avatar file (.guava), posed on the default body.
-        #[arg(long)]
-        avatar: Option<PathBuf>,
-        /// With --avatar: the EHM body (tools/convert_ehm.py) a GUAVA-mode avatar is bound to;
-        /// without it, avatars are posed on the default body.
-        #[arg(long, requires = "avatar")]
-        ehm: Option<PathBuf>,
-        /// With --avatar: pose it from this motion (tracking .json, ARKit .csv, SMPL-X .npz) at --time.
-        #[arg(long, requires = "avatar")]
-        motion: Option<PathBuf>,
-        #[arg(long, default_value_t = 0.0, requires = "motion", value_parser = args::seconds)]
-        time: f64,
-        /// With --avatar: pose it as its photo shows it (the view it keeps).
-        #[arg(long, requires = "avatar", conflicts_with = "motion")]
-        source_pose: bool,
-        /// With --motion or --source-pose: view through the motion's tracked camera or the
-        /// photo's camera (512², as GUAVA renders).
-        #[arg(long)]
-        tracked_camera: bool,
-        /// Run the avatar's refiner on the splat image: the default refiner for default-mode
-        /// avatars, GUAVA's (from --guava-models) for GUAVA-mode ones.
-        #[arg(long, requires = "avatar")]
-        refine: bool,
-        /// With --refine: GUAVA's networks folder (tools/export_guava_onnx.py), whose refiner a
-        /// GUAVA-mode avatar is refined by.
-        #[arg(long, requires = "refine")]
-        guava_models: Option<PathBuf>,
-        #[arg(long)]
-        out: PathBuf,
-        /// Image size in pixels (1 to 8192).
-        #[arg(long, default_value_t = 512, value_parser = args::image_side)]
-        width: u32,
-        #[arg(long, default_value_t = 512, value_parser = args::image_side)]
-        height: u32,
-        /// Vertical field of view in degrees (above 0, below 180).
-        #[arg(long, default_value_t = 50.0, value_parser = args::field_of_view)]
-        fov: f32,
-        /// Orbit angles in degrees around the cloud's centre.
-        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_parser = args::angle)]
-        yaw: f32,
-        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_parser = args::angle)]
-        pitch: f32,
-    },
+    /// Render a 3DGS .ply file or an avatar to a PNG, framed by an orbit camera; or with
+    /// --sequence, a motion (or a turntable) as a PNG sequence and an animated GIF.
+    Render(Box<render::RenderArgs>),
     /// Read a motion (tracking .json, ARKit .csv, SMPL-X .npz), say what the default body (or an
     /// EHM model) takes of it, and optionally write it in our tracking format.
     Motion {
@@ -247,106 +201,7 @@ fn exit_quietly_on_a_closed_pipe() {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info => info(),
-        Command::Render {
-            ply,
-            avatar,
-            ehm,
-            motion,
-            time,
-            source_pose,
-            tracked_camera,
-            refine,
-            guava_models,
-            out,
-            width,
-            height,
-            fov,
-            yaw,
-            pitch,
-        } => {
-            // Avatars stand on a y-up body; splat files use GUAVA's y-down axes.
-            let is_avatar = avatar.is_some();
-            let mut refiner = None;
-            let (cloud, name, tracked) = match (ply, avatar) {
-                (Some(ply), _) => {
-                    let cloud = guava::gaussians::read_file(&ply)?;
-                    (cloud, ply.display().to_string(), None)
-                }
-                (None, Some(avatar)) => {
-                    let avatar_file = guava::avatar::Avatar::load(&avatar)?;
-                    if refine {
-                        let path =
-                            guava::refine::refiner_for(avatar_file.kind, guava_models.as_deref())
-                                .map_err(|e| {
-                                anyhow::anyhow!("{}: {e} (--guava-models)", avatar.display())
-                            })?;
-                        refiner = Some(path);
-                    }
-                    let posing = match (motion.as_deref(), source_pose) {
-                        (Some(m), _) => Posing::Motion(m, time),
-                        (None, true) => Posing::Source,
-                        (None, false) => Posing::Rest,
-                    };
-                    let (cloud, camera) = match ehm {
-                        Some(ehm) => {
-                            let mut body = guava::body::EhmModel::load(&ehm)?;
-                            avatar_file.apply_ehm_identity(&mut body);
-                            posed_avatar(&avatar_file, &body, posing)
-                        }
-                        None => posed_avatar(
-                            &avatar_file,
-                            &guava::body::BodyModel::default_body()?,
-                            posing,
-                        ),
-                    }
-                    .with_context(|| avatar.display().to_string())?;
-                    (
-                        cloud,
-                        avatar.display().to_string(),
-                        camera.filter(|_| tracked_camera),
-                    )
-                }
-                (None, None) => anyhow::bail!("give --ply or --avatar"),
-            };
-            if tracked_camera && tracked.is_none() {
-                anyhow::bail!(
-                    "--tracked-camera: no camera to look through (give a motion with tracked \
-                     cameras, or --source-pose for an avatar that keeps its photo's view)"
-                );
-            }
-            let camera = match tracked {
-                Some(camera) => camera,
-                None => {
-                    let view = guava::camera::orbit_view(
-                        &cloud,
-                        fov.to_radians(),
-                        yaw.to_radians(),
-                        pitch.to_radians(),
-                        is_avatar,
-                    )
-                    .with_context(|| format!("{name}: no finite Gaussian to frame"))?;
-                    Camera::from_fov_y(view, width, height, fov.to_radians())
-                }
-            };
-            let mut renderer = HeadlessRenderer::new(GpuContext::headless()?);
-            let background = vec![0.0; cloud.channels];
-            let (mut image, stats) = renderer.render(&cloud, &camera, &background)?;
-            if let Some(path) = refiner {
-                let runtime = guava::onnx::OnnxRuntime::load()?;
-                image = guava::refine::Refiner::load(runtime, &path)?.refine(&image)?;
-            }
-            guava::render::save_png(&image.to_rgb8(), &out)?;
-            println!(
-                "{name}: {} Gaussians, {} drawn, {} culled ({} tile pairs) → {} [{}]",
-                stats.input,
-                stats.visible,
-                stats.culled(),
-                stats.tile_pairs,
-                out.display(),
-                renderer.gpu.adapter_label()
-            );
-            Ok(())
-        }
+        Command::Render(args) => render::run(*args),
         Command::SynthPhoto { out, yaw, subject } => photo::synth_photo(&out, yaw, subject),
         Command::Report(args) => report::report(&args),
         Command::RefinerPairs { out, split } => refiner::write_pairs(
@@ -401,51 +256,6 @@ fn run(cli: Cli) -> Result<()> {
             Bench::Fidelity(args) => bench::fidelity(&args),
         },
     }
-}
-
-/// How `guava render` poses an avatar.
-enum Posing<'a> {
-    Rest,
-    /// A motion file at a time.
-    Motion(&'a Path, f64),
-    /// As its photo shows it.
-    Source,
-}
-
-/// An avatar posed on its body, with the camera that goes with the pose: the motion's tracked
-/// camera at that time (if it has one), or the photo's.
-fn posed_avatar(
-    avatar: &guava::avatar::Avatar,
-    body: &impl guava::body::Posable,
-    posing: Posing,
-) -> Result<(guava::gaussians::GaussianCloud, Option<Camera>)> {
-    use guava::body::{BodyPose, PosedBody};
-    avatar.check_body(body).map_err(anyhow::Error::msg)?;
-    let mut pose = BodyPose::rest(body);
-    let mut camera = None;
-    match posing {
-        Posing::Rest => {}
-        Posing::Motion(motion, time) => {
-            let t = guava::tracking::import::open_motion(motion)?.tracking;
-            guava::tracking::Retarget::new(&t, body).sample(&t, time, &mut pose);
-            camera = guava::tracking::camera_at(&t, time)
-                .map(|(w2c, invtanfov)| Camera::guava(w2c, guava::photo::SOURCE_SIZE, invtanfov));
-        }
-        Posing::Source => {
-            let view = avatar
-                .source_view
-                .as_ref()
-                .ok_or(guava::eval::EvalError::NoSourceView)?;
-            pose = view.pose.clone();
-            camera = Some(view.camera);
-        }
-    }
-    avatar.apply_identity(body, &mut pose);
-    let mut posed = PosedBody::default();
-    body.pose(&pose, &mut posed)?;
-    let mut cloud = guava::gaussians::GaussianCloud::new(avatar.channels);
-    guava::avatar::Rig::default().animate(avatar, &posed, body, &mut cloud)?;
-    Ok((cloud, camera))
 }
 
 fn motion(file: &Path, out: Option<&Path>, ehm: Option<&Path>) -> Result<()> {
