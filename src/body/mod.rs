@@ -17,6 +17,7 @@ mod glb;
 mod head_size;
 mod joint_map;
 mod lbs;
+pub mod mesh_export;
 mod normals;
 mod points;
 mod pose;

@@ -103,6 +103,17 @@ impl GaussianCloud {
         &self.features[i * self.channels..(i + 1) * self.channels]
     }
 
+    /// Turns the whole cloud about the origin: centres and orientations (e.g. a y-up avatar
+    /// into the y-down axes 3DGS files use).
+    pub fn rotate(&mut self, by: glam::Quat) {
+        for (p, r) in self.positions.iter_mut().zip(&mut self.rotations) {
+            *p = (by * glam::Vec3::from(*p)).to_array();
+            let [w, x, y, z] = *r;
+            let q = by * glam::Quat::from_xyzw(x, y, z, w);
+            *r = [q.w, q.x, q.y, q.z];
+        }
+    }
+
     /// Axis-aligned bounds of the finite centres, for framing a camera; `None` if there are none.
     pub fn bounds(&self) -> Option<(glam::Vec3, glam::Vec3)> {
         let mut it = self

@@ -9,6 +9,7 @@ mod readback;
 pub mod reference;
 mod rig;
 mod scan;
+pub mod sequence;
 mod shader;
 mod sort;
 pub mod splatter;
@@ -87,6 +88,21 @@ impl SplatImage {
     pub fn plane(&self, channel: usize) -> &[f32] {
         let n = self.width as usize * self.height as usize;
         &self.features[channel * n..(channel + 1) * n]
+    }
+
+    /// RGB rendered on black (premultiplied) composited over `background`, as 8-bit RGB.
+    pub fn over(&self, background: [f32; 3]) -> image::RgbImage {
+        let (r, g, b) = (self.plane(0), self.plane(1), self.plane(2));
+        let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+        image::RgbImage::from_fn(self.width, self.height, |x, y| {
+            let i = (y * self.width + x) as usize;
+            let t = 1.0 - self.alpha[i];
+            image::Rgb([
+                q(r[i] + background[0] * t),
+                q(g[i] + background[1] * t),
+                q(b[i] + background[2] * t),
+            ])
+        })
     }
 
     /// Channels 0..3 (or the one channel, as grey) as 8-bit RGB, clamped to [0, 1].

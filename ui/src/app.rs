@@ -126,6 +126,8 @@ pub struct GuavaApp {
     pub(crate) display: Display,
     /// The refiner pass, run when the view settles.
     pub(crate) refined: RefinedView,
+    /// The export window's settings.
+    pub(crate) export: crate::exports::ExportSettings,
     pub(crate) background: [f32; 3],
     pub(crate) interaction: Interaction,
     pub(crate) report: Arc<Mutex<ViewReport>>,
@@ -191,6 +193,7 @@ impl GuavaApp {
             camera_mode: CameraMode::Orbit,
             display: Display::default(),
             refined: RefinedView::default(),
+            export: Default::default(),
             background: [0.0; 3],
             // A software adapter cannot splat the full viewport at interactive rates.
             interaction: Interaction {
@@ -287,6 +290,20 @@ impl GuavaApp {
     /// choice); a camera the current content lacks falls back to the orbit.
     pub fn set_camera_mode(&mut self, mode: CameraMode) {
         self.camera_mode = mode;
+    }
+
+    /// Stops the running job at its next step (what it loaded is dropped; what an export
+    /// wrote so far stays, each file whole).
+    pub fn cancel_job(&mut self) {
+        if let Some(job) = self.job.take() {
+            job.cancel();
+            self.info(format!("{}: cancelled", job.path.display()));
+        }
+    }
+
+    /// The export window's settings (size, camera path, rate).
+    pub fn export_settings(&mut self) -> &mut crate::exports::ExportSettings {
+        &mut self.export
     }
 
     /// The orbit camera (what dragging, the camera panel and its presets move).
@@ -421,6 +438,7 @@ impl eframe::App for GuavaApp {
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
             .show(ui, |ui| self.viewport_ui(ui));
+        self.export_ui(&ctx);
 
         self.take_view_report(&ctx);
         self.automation(&ctx);

@@ -211,6 +211,7 @@ impl GuavaApp {
                 self.set_motion(label, imported);
             }
             Ok(Loaded::Avatar(loaded)) => self.accept_avatar(&path, *loaded),
+            Ok(Loaded::Exported(message)) => self.info(message),
             Err(e) => self.error(e),
         }
     }

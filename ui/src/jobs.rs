@@ -31,6 +31,8 @@ pub enum Loaded {
     Wholebody(PathBuf),
     /// An avatar file, or a reconstruction (then with what it saw and how long it took).
     Avatar(Box<LoadedAvatar>),
+    /// An export finished: what was written.
+    Exported(String),
 }
 
 /// An avatar as a job hands it over.
@@ -63,28 +65,32 @@ pub struct Job {
     pub path: PathBuf,
     pub started: Instant,
     rx: Receiver<Result<Loaded, String>>,
-    /// The stage it is in, shown beside the spinner.
-    stage: Arc<Mutex<&'static str>>,
+    /// The stage it is in (or its progress), shown beside the spinner.
+    stage: Arc<Mutex<String>>,
     /// Set by Cancel; jobs that check it stop at their next stage.
     cancel: Arc<AtomicBool>,
 }
 
 /// What a job function gets: where to publish its stage, and whether it was cancelled.
 pub struct JobContext<'a> {
-    stage: &'a Mutex<&'static str>,
+    stage: &'a Mutex<String>,
     cancel: &'a AtomicBool,
 }
 
 impl JobContext<'_> {
-    pub fn set_stage(&self, stage: &'static str) {
-        *self.stage.lock().unwrap_or_else(|e| e.into_inner()) = stage;
+    pub fn set_stage(&self, stage: impl Into<String>) {
+        *self.stage.lock().unwrap_or_else(|e| e.into_inner()) = stage.into();
+    }
+
+    pub fn cancelled(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed)
     }
 
     /// A progress callback for the pipeline: publishes the stage, stops when cancelled.
     pub fn progress(&self) -> impl FnMut(Stage) -> bool + '_ {
         move |s| {
             self.set_stage(s.name());
-            !self.cancel.load(Ordering::Relaxed)
+            !self.cancelled()
         }
     }
 }
@@ -97,7 +103,7 @@ impl Job {
         work: impl FnOnce(&JobContext) -> Result<Loaded, String> + Send + 'static,
     ) -> Self {
         let (tx, rx) = std::sync::mpsc::channel();
-        let stage = Arc::new(Mutex::new(first_stage));
+        let stage = Arc::new(Mutex::new(first_stage.to_string()));
         let cancel = Arc::new(AtomicBool::new(false));
         let (worker_stage, worker_cancel) = (stage.clone(), cancel.clone());
         std::thread::spawn(move || {
@@ -117,8 +123,8 @@ impl Job {
         }
     }
 
-    pub fn stage(&self) -> &'static str {
-        *self.stage.lock().unwrap_or_else(|e| e.into_inner())
+    pub fn stage(&self) -> String {
+        self.stage.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
 
     pub fn cancel(&self) {

@@ -5,6 +5,7 @@ pub mod app;
 pub mod avatar_view;
 pub mod body_model;
 pub mod body_panel;
+mod exports;
 mod fidelity;
 mod files;
 mod jobs;
@@ -18,4 +19,5 @@ mod viewport;
 
 pub use app::{CameraMode, GuavaApp, Options, View};
 pub use avatar_view::FitAction;
+pub use exports::{CameraPath, ExportSettings};
 pub use files::demo_portrait;

@@ -65,6 +65,11 @@ impl Motion {
         guava::tracking::camera_at(&self.tracking, self.player.time())
     }
 
+    /// The tracking and its mapping onto the body, to pose frames elsewhere (an export).
+    pub fn sampler(&self) -> (Arc<Tracking>, Retarget) {
+        (self.tracking.clone(), self.retarget.clone())
+    }
+
     pub fn is_playing(&self) -> bool {
         self.player.playing
     }

@@ -86,11 +86,13 @@ impl Control {
 }
 
 /// Slider values by name; controls not named are 0.
+#[derive(Clone)]
 pub struct Preset {
     pub name: &'static str,
     values: Vec<(String, f32)>,
 }
 
+#[derive(Clone)]
 pub struct Group {
     pub name: String,
     pub controls: Vec<Control>,
@@ -153,6 +155,7 @@ impl Group {
 }
 
 /// The groups for one body.
+#[derive(Clone)]
 pub struct PoseControls {
     pub groups: Vec<Group>,
 }

@@ -143,18 +143,12 @@ fn refine(
         .expect("loaded above")
         .refine(&image)
         .map_err(|e| e.to_string())?;
-    let n = refined.alpha.len();
-    let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-    let pixels = (0..n)
-        .map(|i| {
-            let over = |c: usize| {
-                refined.features[c * n + i] + key.background[c] * (1.0 - refined.alpha[i])
-            };
-            egui::Color32::from_rgb(q(over(0)), q(over(1)), q(over(2)))
-        })
-        .collect();
+    let rgb = refined.over(key.background);
     Ok(Refined {
-        image: egui::ColorImage::new([refined.width as usize, refined.height as usize], pixels),
+        image: egui::ColorImage::from_rgb(
+            [rgb.width() as usize, rgb.height() as usize],
+            rgb.as_raw(),
+        ),
         millis: started.elapsed().as_secs_f32() * 1e3,
     })
 }

@@ -856,3 +856,70 @@ fn grouped_controls_pose_in_peoples_terms_override_the_motion_until_reset() {
     let model = body.model.clone();
     assert_eq!(model.joint_names().len(), body.pose.rotations.len());
 }
+
+/// Exports of the avatar on screen: the view as a PNG at the asked size, the demo motion as a
+/// turntable PNG sequence with its GIF, the posed avatar as a 3DGS PLY that reads back (y down)
+/// and the posed body as glTF; a cancelled sequence leaves whole frames and says so.
+#[test]
+fn exports_write_the_view_a_sequence_a_ply_and_a_mesh() {
+    let mut h = synthetic_avatar();
+    let dir = std::env::temp_dir().join(format!("guava-ui-export-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let settings = h.state_mut().export_settings();
+    (settings.width, settings.height) = (96, 64);
+    let png = dir.join("view.png");
+    h.state_mut().export_png(png.clone());
+    let status = wait_for_status(&mut h, "view.png");
+    assert!(status.starts_with("wrote"), "{status}");
+    let image = image::open(&png).expect("a whole PNG");
+    assert_eq!((image.width(), image.height()), (96, 64));
+
+    let settings = h.state_mut().export_settings();
+    (settings.fps, settings.path) = (2.0, guava_ui::CameraPath::Turntable);
+    let frames = dir.join("frames");
+    h.state_mut().export_sequence(frames.clone());
+    let status = wait_for_status(&mut h, "frames");
+    assert!(status.contains("wrote 17 frames"), "{status}");
+    for i in 0..17 {
+        let f = image::open(guava::render::sequence::frame_path(&frames, i)).expect("frame");
+        assert_eq!((f.width(), f.height()), (96, 64));
+    }
+    use image::AnimationDecoder;
+    let gif = std::fs::File::open(frames.join("sequence.gif")).expect("gif");
+    let decoder = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(gif)).expect("gif");
+    assert_eq!(decoder.into_frames().count(), 17);
+
+    // Cancelled right away: an error that says so, no half frame.
+    let cancelled = dir.join("cancelled");
+    h.state_mut().export_sequence(cancelled.clone());
+    h.state_mut().cancel_job();
+    let status = wait_for_status(&mut h, "cancelled");
+    assert!(
+        status.starts_with(&cancelled.display().to_string()),
+        "{status}"
+    );
+    // The worker stops at its next frame; what it wrote is whole.
+    std::thread::sleep(Duration::from_secs(3));
+    let leftovers: Vec<_> = std::fs::read_dir(&cancelled)
+        .map(|d| d.flatten().map(|e| e.path()).collect())
+        .unwrap_or_default();
+    assert!(
+        leftovers.iter().all(|p| image::open(p).is_ok()),
+        "{leftovers:?}"
+    );
+
+    let ply = dir.join("posed.ply");
+    h.state_mut().export_posed_ply(&ply).expect("ply");
+    let cloud = guava::gaussians::read_file(&ply).expect("reads back");
+    let (_, count) = h.state().avatar_info().expect("avatar");
+    assert_eq!(cloud.len(), count);
+    let (lo, hi) = cloud.bounds().expect("finite");
+    // Standing, y down: the head (0.66 m up on the body) is at the smallest y.
+    assert!(hi.y - lo.y > 1.0 && lo.y < -0.6, "{lo} {hi}");
+    let glb = dir.join("posed.glb");
+    h.state_mut().export_posed_mesh(&glb).expect("glb");
+    let bytes = std::fs::read(&glb).expect("glb");
+    let gltf = gltf::Gltf::from_slice(&bytes).expect("valid glTF");
+    assert_eq!(gltf.meshes().count(), 1);
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -14,7 +14,7 @@ use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
 use guava::gpu::GpuContext;
 use guava::refine::Refiner;
-use guava::render::HeadlessRenderer;
+use guava::render::{HeadlessRenderer, sequence};
 use guava::tracking::{Retarget, Tracking};
 
 use crate::args;
@@ -335,8 +335,7 @@ impl Frames<'_> {
         let (times, fps) = match self.subject.motion() {
             Some((duration, motion_fps)) => {
                 let fps = a.fps.unwrap_or(motion_fps);
-                let n = (duration * fps as f64).floor() as usize + 1;
-                ((0..n).map(|i| i as f64 / fps as f64).collect(), fps)
+                (sequence::frame_times(duration, fps), fps)
             }
             None => (vec![a.time; a.frames.unwrap_or(60)], a.fps.unwrap_or(30.0)),
         };
@@ -350,7 +349,7 @@ impl Frames<'_> {
                 _ => 0.0,
             };
             let (image, _) = self.render(time, a.yaw.to_radians() + turn)?;
-            let file = dir.join(format!("frame_{i:05}.png"));
+            let file = sequence::frame_path(dir, i);
             guava::render::save_png(&image, &file)?;
             written.push(file);
             let per = started.elapsed().as_secs_f64() / (i + 1) as f64;
@@ -370,27 +369,9 @@ impl Frames<'_> {
             self.renderer.gpu.adapter_label()
         );
         if let Some(gif) = &a.gif {
-            write_gif(&written, fps, gif)?;
+            sequence::write_gif(&written, fps, gif)?;
             println!("{} frames → {}", n, gif.display());
         }
         Ok(())
     }
-}
-
-/// The PNG frames as one looping animated GIF at `fps`, written atomically.
-fn write_gif(frames: &[PathBuf], fps: f32, out: &Path) -> Result<()> {
-    use image::codecs::gif::{GifEncoder, Repeat};
-    let delay = image::Delay::from_numer_denom_ms(1000, fps.round().max(1.0) as u32);
-    guava::atomic_file::write_atomic(out, |file| {
-        let mut gif = GifEncoder::new_with_speed(file, 10);
-        gif.set_repeat(Repeat::Infinite)
-            .map_err(std::io::Error::other)?;
-        for path in frames {
-            let rgba = image::open(path).map_err(std::io::Error::other)?.to_rgba8();
-            gif.encode_frame(image::Frame::from_parts(rgba, 0, 0, delay))
-                .map_err(std::io::Error::other)?;
-        }
-        Ok(())
-    })
-    .with_context(|| format!("writing {}", out.display()))
 }

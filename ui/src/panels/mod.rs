@@ -61,6 +61,14 @@ impl GuavaApp {
                     self.save_avatar_dialog();
                     ui.close();
                 }
+                if ui
+                    .add_enabled(self.avatar.is_some(), egui::Button::new("Export…"))
+                    .on_hover_text("the view as PNG, the timeline as a PNG sequence and GIF, the posed avatar as PLY, the posed mesh as glTF")
+                    .clicked()
+                {
+                    self.export.open = true;
+                    ui.close();
+                }
                 ui.separator();
                 if ui.button("Quit").clicked() {
                     ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
@@ -89,9 +97,8 @@ impl GuavaApp {
                     job.started.elapsed().as_secs_f32()
                 ));
                 if ui.button("Cancel").clicked() {
-                    job.cancel();
-                    self.job = None;
-                    self.info("loading cancelled".into());
+                    self.cancel_job();
+                    return;
                 }
                 ui.ctx().request_repaint();
             } else if let Some((text, is_error)) = &self.status {
