@@ -57,7 +57,26 @@ impl StageTimer {
     /// Milliseconds per stage, in [`Stage::ALL`] order (waits for the GPU).
     pub fn read_ms(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Vec<f64> {
         let bytes = read_buffers(device, queue, &[(&self.resolve, self.resolve.size())]);
-        let ticks: &[u64] = bytemuck::cast_slice(&bytes[0]);
+        self.ms(bytemuck::cast_slice(&bytes[0]))
+    }
+
+    /// Bytes of resolved timestamps ([`Self::copy_resolved`] copies them).
+    pub fn resolved_size(&self) -> u64 {
+        self.resolve.size()
+    }
+
+    /// Copies the resolved timestamps into `dst` at `offset`, to read without waiting.
+    pub fn copy_resolved(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        dst: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        encoder.copy_buffer_to_buffer(&self.resolve, 0, dst, offset, self.resolve.size());
+    }
+
+    /// Milliseconds per stage from resolved timestamps (begin, end per stage).
+    pub fn ms(&self, ticks: &[u64]) -> Vec<f64> {
         ticks
             .chunks_exact(2)
             .map(|t| t[1].saturating_sub(t[0]) as f64 * self.period_ns as f64 * 1e-6)

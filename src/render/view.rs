@@ -13,7 +13,7 @@ use glam::Vec3;
 
 use super::mesh::{MeshPass, MeshStyle};
 use super::present::{PresentMode, PresentPass, PresentUniform};
-use super::{GpuAvatar, RasterTuning, RenderStats, SplatPipelines, Splatter};
+use super::{GpuAvatar, RasterTuning, RenderStats, SplatPipelines, Splatter, StageTimer};
 use crate::avatar::Avatar;
 use crate::body::PosedBody;
 use crate::camera::Camera;
@@ -125,7 +125,17 @@ pub struct ViewReport {
     /// Content the GPU could not take (too large for the adapter, or posed on another body);
     /// the UI shows it once and clears it.
     pub error: Option<String>,
+    /// GPU time of each splatting stage ([`Stage::ALL`] order, ms) of the last frame whose
+    /// counters came back; `None` where the adapter has no timestamps.
+    pub stage_ms: Option<Vec<f64>>,
+    /// CPU time of the last frame's prepare: rig upload, splat uniforms, command encoding (ms).
+    pub prepare_ms: f32,
+    /// GPU memory the splatting pass holds (bytes).
+    pub splat_bytes: u64,
 }
+
+/// The splat counters' size in the readback buffer.
+const STATS_BYTES: u64 = 32;
 
 /// Which splat input the splatter holds.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -179,8 +189,10 @@ pub struct ViewRenderer {
     present: PresentPass,
     present_uniform: wgpu::Buffer,
     present_bind: Option<wgpu::BindGroup>,
+    /// The splat counters (32 bytes), then the stage timestamps where the device has them.
     stats_staging: wgpu::Buffer,
     stats_state: StatsReadback,
+    timer: Option<StageTimer>,
     mesh: MeshPass,
     mesh_topology: Option<u64>,
     mesh_uploaded: Option<u64>,
@@ -191,6 +203,7 @@ impl ViewRenderer {
     /// The passes for a device (its rasterizer tuned to `adapter`), drawing into `target`.
     pub fn new(
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         adapter: &wgpu::AdapterInfo,
         target: wgpu::TextureFormat,
     ) -> Self {
@@ -198,6 +211,7 @@ impl ViewRenderer {
             device,
             RasterTuning::for_device(adapter, device.features()),
         ));
+        let timer = StageTimer::new(device, queue);
         Self {
             splatter: Splatter::new(device, pipelines.clone()),
             pipelines,
@@ -215,11 +229,12 @@ impl ViewRenderer {
             present_bind: None,
             stats_staging: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("View::stats_staging"),
-                size: 32,
+                size: STATS_BYTES + timer.as_ref().map_or(0, StageTimer::resolved_size),
                 usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
                 mapped_at_creation: false,
             }),
             stats_state: StatsReadback::Idle,
+            timer,
             mesh: MeshPass::new(device, Some(target)),
             mesh_topology: None,
             mesh_uploaded: None,
@@ -229,6 +244,21 @@ impl ViewRenderer {
 
     /// Records what `frame` needs beyond the last render, if anything.
     pub fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        frame: &Frame,
+        report: &mut ViewReport,
+    ) -> Option<wgpu::CommandBuffer> {
+        let started = std::time::Instant::now();
+        let buffer = self.prepare_content(device, queue, frame, report);
+        if buffer.is_some() {
+            report.prepare_ms = started.elapsed().as_secs_f32() * 1e3;
+        }
+        buffer
+    }
+
+    fn prepare_content(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -335,13 +365,15 @@ impl ViewRenderer {
         look: &Look,
         report: &mut ViewReport,
     ) -> Option<wgpu::CommandBuffer> {
-        if let Some(stats) = self.poll_stats(device) {
+        if let Some((stats, stage_ms)) = self.poll_stats(device) {
             if self.splatter.grow_for(device, &stats) {
                 self.last = None;
                 report.needs_redraw = true;
             }
             report.stats = Some(stats);
+            report.stage_ms = stage_ms;
         }
+        report.splat_bytes = self.splatter.memory().total();
         let camera = frame.camera.scaled(frame.scale);
         let key = SplatKey {
             source: self.source?,
@@ -365,15 +397,22 @@ impl ViewRenderer {
                 gpu.encode(&mut encoder);
                 report.rigs += 1;
             }
-            self.splatter.encode(&mut encoder, None);
-            if matches!(self.stats_state, StatsReadback::Idle) {
+            // Timed (where the device can) on the frames whose counters are read back.
+            let read_back = matches!(self.stats_state, StatsReadback::Idle);
+            let timer = self.timer.as_ref().filter(|_| read_back);
+            self.splatter.encode(&mut encoder, timer);
+            if read_back {
                 encoder.copy_buffer_to_buffer(
                     self.splatter.stats_buffer(),
                     0,
                     &self.stats_staging,
                     0,
-                    32,
+                    STATS_BYTES,
                 );
+                if let Some(timer) = timer {
+                    timer.resolve(&mut encoder);
+                    timer.copy_resolved(&mut encoder, &self.stats_staging, STATS_BYTES);
+                }
                 self.stats_state = StatsReadback::Copied;
             }
             buffer = Some(encoder.finish());
@@ -438,8 +477,9 @@ impl ViewRenderer {
         Some(encoder.finish())
     }
 
-    /// Advances the non-blocking stats readback; returns stats when a copy has landed.
-    fn poll_stats(&mut self, device: &wgpu::Device) -> Option<RenderStats> {
+    /// Advances the non-blocking stats readback; returns the counters (and the stage times,
+    /// where timed) when a copy has landed.
+    fn poll_stats(&mut self, device: &wgpu::Device) -> Option<(RenderStats, Option<Vec<f64>>)> {
         match &self.stats_state {
             StatsReadback::Idle => None,
             StatsReadback::Copied => {
@@ -459,16 +499,27 @@ impl ViewRenderer {
                 if !done.load(Ordering::Acquire) {
                     return None;
                 }
-                let words: Vec<u32> = self
+                let bytes: Vec<u8> = self
                     .stats_staging
                     .slice(..)
                     .get_mapped_range()
-                    .map(|v| bytemuck::cast_slice(&v).to_vec())
+                    .map(|v| v.to_vec())
                     .unwrap_or_default();
                 self.stats_staging.unmap();
                 self.stats_state = StatsReadback::Idle;
-                (words.len() == 8)
-                    .then(|| RenderStats::from_words(self.splatter.num_gaussians(), &words))
+                if bytes.len() < STATS_BYTES as usize {
+                    return None;
+                }
+                let (words, ticks) = bytes.split_at(STATS_BYTES as usize);
+                let stats = RenderStats::from_words(
+                    self.splatter.num_gaussians(),
+                    bytemuck::cast_slice(words),
+                );
+                let stage_ms = self
+                    .timer
+                    .as_ref()
+                    .map(|t| t.ms(bytemuck::cast_slice(ticks)));
+                Some((stats, stage_ms))
             }
         }
     }

@@ -155,7 +155,7 @@ impl GuavaApp {
         let gpu = match cc.wgpu_render_state.as_ref() {
             Some(rs) => {
                 let info = rs.adapter.get_info();
-                let view = ViewRenderer::new(&rs.device, &info, rs.target_format);
+                let view = ViewRenderer::new(&rs.device, &rs.queue, &info, rs.target_format);
                 rs.renderer.write().callback_resources.insert(view);
                 Gpu {
                     ready: true,
@@ -321,6 +321,11 @@ impl GuavaApp {
     /// Refined frames shown so far (the refiner pass runs once the view settles).
     pub fn refined_frames(&self) -> u64 {
         self.refined.frames
+    }
+
+    /// Whether the viewport's last frame showed the refined image (else the raw splat).
+    pub fn showing_refined(&self) -> bool {
+        self.refined.showing
     }
 
     pub fn report(&self) -> ViewReport {

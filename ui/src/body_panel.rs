@@ -25,6 +25,8 @@ pub struct BodyState {
     pub pose: BodyPose,
     /// Face, hands and body controls in people's terms; touched groups override `pose`.
     pub controls: PoseControls,
+    /// CPU time of the last re-pose (skinning), for the HUD.
+    pub pose_ms: f32,
     pub shaded: bool,
     pub wireframe: bool,
     selected_joint: usize,
@@ -58,6 +60,7 @@ impl BodyState {
             label,
             pose,
             controls,
+            pose_ms: 0.0,
             shaded: true,
             wireframe: false,
             selected_joint,
@@ -106,10 +109,12 @@ impl BodyState {
             return;
         }
         // In place unless the viewport still holds the last pose.
+        let started = std::time::Instant::now();
         if let Err(e) = self.model.pose(&pose, Arc::make_mut(&mut self.posed)) {
             log::error!("posing failed: {e}");
             return;
         }
+        self.pose_ms = started.elapsed().as_secs_f32() * 1e3;
         self.mesh = None;
         self.posed_for = Some(pose);
         self.pose_id = next_id();

@@ -47,6 +47,8 @@ pub struct RefinedView {
     pub unavailable: Option<String>,
     /// Refined frames shown so far.
     pub frames: u64,
+    /// Whether the frame on screen is the refined one.
+    pub showing: bool,
 }
 
 impl Default for RefinedView {
@@ -60,6 +62,7 @@ impl Default for RefinedView {
             error: None,
             unavailable: None,
             frames: 0,
+            showing: false,
         }
     }
 }

@@ -707,11 +707,20 @@ fn the_settled_view_is_refined_and_a_drag_shows_the_raw_splat() {
     let renders = frames_without_splatting(&mut h, 3, "the refined frame");
     assert_eq!(h.state().refined_frames(), 1);
     // The splatting view keeps its frame under the refined one, so its counters reach the HUD
-    // (they did not when the refined frame replaced it before they came back).
+    // (they did not when the refined frame replaced it before they came back), with each
+    // stage's GPU time where the adapter has timestamps (lavapipe has), its memory and the
+    // CPU's share of the frame.
+    let report = h.state().report();
+    assert!(report.stats.is_some(), "splat stats reach the HUD");
+    if let Some(ms) = &report.stage_ms {
+        assert_eq!(ms.len(), 6);
+        assert!(ms.iter().all(|t| t.is_finite() && *t >= 0.0) && ms.iter().sum::<f64>() > 0.0);
+    }
     assert!(
-        h.state().report().stats.is_some(),
-        "splat stats reach the HUD"
+        report.splat_bytes > 0 && report.prepare_ms > 0.0,
+        "{report:?}"
     );
+    h.get_by_label("refined");
 
     let end = drag_in_viewport(&mut h);
     assert!(
@@ -922,4 +931,21 @@ fn exports_write_the_view_a_sequence_a_ply_and_a_mesh() {
     let gltf = gltf::Gltf::from_slice(&bytes).expect("valid glTF");
     assert_eq!(gltf.meshes().count(), 1);
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A viewport taller than the largest texture egui's device takes (2048 here) is refined at a
+/// size the texture can hold and stretched over it; it panicked before.
+#[test]
+fn a_viewport_beyond_the_texture_limit_is_refined() {
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1100.0, 2300.0))
+        .wgpu()
+        .build_eframe(|cc| GuavaApp::new(cc, Options::default()));
+    h.run();
+    h.state_mut().reconstruct_synthetic_photo();
+    wait_until(&mut h, |app| app.refined_frames() > 0);
+    assert_eq!(h.state().refined_frames(), 1);
+    frame(&mut h);
+    let size = h.state().report().rendered_size;
+    assert!(size[1] > 2048, "the splat view is that tall: {size:?}");
 }

@@ -1,8 +1,10 @@
 //! The display panel (which channels, alpha or depth; the background; the resolution while
-//! interacting) and the frame panel: the adapter, the UI's frame time and the splatting pass's
-//! counters.
+//! interacting) and the frame panel (the HUD): the adapter, the frame's time per pass (pose,
+//! rig and encoding on the CPU, each splatting stage on the GPU where it has timestamps, the
+//! refiner), whether the frame is refined, the splatting pass's counters and memory.
 
 use guava::render::present::PresentMode;
+use guava::render::splatter::Stage;
 
 use crate::app::{GuavaApp, View};
 
@@ -101,6 +103,35 @@ impl GuavaApp {
                 };
                 row("adapter", self.gpu.adapter.clone());
                 row("UI frame", format!("{:.1} ms", self.clock.frame_ms));
+                if let Some(body) = &self.body {
+                    row("pose (CPU)", format!("{:.1} ms", body.pose_ms));
+                }
+                row("rig + encode (CPU)", format!("{:.1} ms", report.prepare_ms));
+                match &report.stage_ms {
+                    Some(ms) => {
+                        for (stage, ms) in Stage::ALL.iter().zip(ms) {
+                            row(&format!("GPU {}", stage.name()), format!("{ms:.2} ms"));
+                        }
+                        row("GPU splatting", format!("{:.2} ms", ms.iter().sum::<f64>()));
+                    }
+                    None => row("GPU stages", "no timestamps on this adapter".into()),
+                }
+                if let Some(ms) = self.refined.last_ms {
+                    row("refine (last)", format!("{ms:.0} ms"));
+                }
+                row(
+                    "on screen",
+                    if self.refined.showing {
+                        "refined"
+                    } else {
+                        "raw splat"
+                    }
+                    .into(),
+                );
+                row(
+                    "splatting memory",
+                    format!("{:.1} MiB", report.splat_bytes as f64 / (1u64 << 20) as f64),
+                );
                 row("splat renders", report.renders.to_string());
                 row("rig passes", report.rigs.to_string());
                 let [w, h] = report.rendered_size;
@@ -116,6 +147,10 @@ impl GuavaApp {
                     ),
                 );
                 if let Some(s) = report.stats {
+                    row("Gaussians", s.input.to_string());
+                    if let Some(a) = self.avatar.as_ref().filter(|a| !a.show_outside) {
+                        row("left out (unseen parts)", a.avatar.outside.to_string());
+                    }
                     row("drawn", s.visible.to_string());
                     row("culled: near", s.near.to_string());
                     row("culled: off-screen", s.outside.to_string());

@@ -93,6 +93,7 @@ impl GuavaApp {
             true => None,
             false => self.refined_frame(ui.ctx(), &content, camera),
         };
+        self.refined.showing = refined.is_some();
         let frame = Frame {
             content,
             camera,
@@ -170,6 +171,11 @@ impl GuavaApp {
             .err()
             .map(|e| format!("{e} (Mode panel > Networks folder…)"));
         let refiner = refiner.ok()?;
+        // The refined frame becomes a texture: no side beyond what egui's device takes (a
+        // taller viewport panicked); it is stretched over the viewport then.
+        let max = ctx.input(|i| i.max_texture_side) as f32;
+        let largest = camera.width.max(camera.height) as f32;
+        let camera = camera.scaled((max / largest).min(1.0));
         let key = RefineKey {
             refiner,
             avatar: avatar.id,

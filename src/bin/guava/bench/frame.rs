@@ -138,6 +138,7 @@ fn interaction(
     let (device, queue) = (&gpu.device, &gpu.queue);
     let mut view = ViewRenderer::new(
         device,
+        queue,
         &gpu.adapter.get_info(),
         wgpu::TextureFormat::Rgba8UnormSrgb,
     );
