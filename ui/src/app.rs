@@ -128,6 +128,10 @@ pub struct GuavaApp {
     pub(crate) refined: RefinedView,
     /// The export window's settings.
     pub(crate) export: crate::exports::ExportSettings,
+    /// Files opened recently, newest first (remembered between runs).
+    pub(crate) recent: Vec<PathBuf>,
+    /// Whether the help window (shortcuts, mouse) is open.
+    pub(crate) help: bool,
     pub(crate) background: [f32; 3],
     pub(crate) interaction: Interaction,
     pub(crate) report: Arc<Mutex<ViewReport>>,
@@ -194,6 +198,8 @@ impl GuavaApp {
             display: Display::default(),
             refined: RefinedView::default(),
             export: Default::default(),
+            recent: Vec::new(),
+            help: false,
             background: [0.0; 3],
             // A software adapter cannot splat the full viewport at interactive rates.
             interaction: Interaction {
@@ -213,6 +219,9 @@ impl GuavaApp {
                 frame_ms: 0.0,
             },
         };
+        if let Some(storage) = cc.storage {
+            app.restore_settings(storage);
+        }
         app.load_default_body();
         app.load_demo_motion();
         if options.test_scene {
@@ -290,6 +299,13 @@ impl GuavaApp {
     /// choice); a camera the current content lacks falls back to the orbit.
     pub fn set_camera_mode(&mut self, mode: CameraMode) {
         self.camera_mode = mode;
+    }
+
+    /// Takes what an earlier run remembered (the look, exports, recent files).
+    pub fn restore_settings(&mut self, storage: &dyn eframe::Storage) {
+        if let Some(settings) = crate::settings::Settings::load(storage) {
+            settings.apply(self);
+        }
     }
 
     /// Stops the running job at its next step (what it loaded is dropped; what an export
@@ -420,6 +436,10 @@ fn save_color_image(image: &egui::ColorImage, path: &std::path::Path) -> anyhow:
 }
 
 impl eframe::App for GuavaApp {
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        crate::settings::Settings::save(self, storage);
+    }
+
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
         let now = Instant::now();
@@ -444,6 +464,8 @@ impl eframe::App for GuavaApp {
             .frame(egui::Frame::NONE)
             .show(ui, |ui| self.viewport_ui(ui));
         self.export_ui(&ctx);
+        self.help_ui(&ctx);
+        self.shortcuts(&ctx);
 
         self.take_view_report(&ctx);
         self.automation(&ctx);

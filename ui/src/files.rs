@@ -194,6 +194,9 @@ impl GuavaApp {
             return;
         };
         let path = self.job.take().map(|j| j.path).unwrap_or_default();
+        if matches!(&result, Ok(l) if !matches!(l, Loaded::Exported(_))) && path.exists() {
+            self.remember(path.clone());
+        }
         match result {
             Ok(Loaded::Cloud(cloud)) => self.accept_cloud(&path, cloud),
             Ok(Loaded::Body(model)) => self.set_body(model, &path.display().to_string()),

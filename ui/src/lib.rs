@@ -15,6 +15,8 @@ pub mod orbit;
 mod panels;
 pub mod pose_controls;
 mod refined;
+mod settings;
+mod shortcuts;
 mod viewport;
 
 pub use app::{CameraMode, GuavaApp, Options, View};

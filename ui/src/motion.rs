@@ -70,6 +70,11 @@ impl Motion {
         (self.tracking.clone(), self.retarget.clone())
     }
 
+    /// Play or pause; playing a finished, unlooped motion starts it over.
+    pub fn toggle_play(&mut self) {
+        toggle(&mut self.player);
+    }
+
     pub fn is_playing(&self) -> bool {
         self.player.playing
     }
@@ -99,11 +104,8 @@ impl Motion {
                 p.step(-1);
             }
             let label = if p.playing { "Pause" } else { "Play" };
-            if ui.button(label).clicked() {
-                if !p.playing && !p.looping && p.time() >= p.duration() {
-                    p.seek(0.0);
-                }
-                p.playing = !p.playing;
+            if ui.button(label).on_hover_text("Space").clicked() {
+                toggle(p);
             }
             if ui.button("Frame >").on_hover_text("Next frame").clicked() {
                 p.step(1);
@@ -150,4 +152,11 @@ impl Motion {
             ui.colored_label(ui.visuals().warn_fg_color, note);
         }
     }
+}
+
+fn toggle(p: &mut Player) {
+    if !p.playing && !p.looping && p.time() >= p.duration() {
+        p.seek(0.0);
+    }
+    p.playing = !p.playing;
 }

@@ -31,6 +31,14 @@ impl Default for OrbitCamera {
 
 const PITCH_LIMIT: f32 = 1.55;
 
+/// Orbit presets around the subject: its front, three-quarter, side and back (yaw, degrees).
+pub const VIEWS: [(&str, f32); 4] = [
+    ("Front", 0.0),
+    ("Three-quarter", 35.0),
+    ("Side", 90.0),
+    ("Back", 180.0),
+];
+
 impl OrbitCamera {
     /// Frames the cloud's bounding sphere, keeping the field of view.
     pub fn framing(cloud: &GaussianCloud, fov_y_rad: f32) -> Self {

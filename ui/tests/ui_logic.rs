@@ -949,3 +949,73 @@ fn a_viewport_beyond_the_texture_limit_is_refined() {
     let size = h.state().report().rendered_size;
     assert!(size[1] > 2048, "the splat view is that tall: {size:?}");
 }
+
+/// Keyboard shortcuts act as their buttons do, and the help window lists them.
+#[test]
+fn shortcuts_play_turn_the_view_and_open_the_help() {
+    let mut h = harness(Options::default());
+    h.run();
+    assert!(!h.state().motion().expect("demo motion").is_playing());
+    h.key_press(egui::Key::Space);
+    h.run_steps(2);
+    assert!(h.state().motion().expect("demo motion").is_playing());
+    h.key_press(egui::Key::Space);
+    h.run_steps(2);
+    assert!(!h.state().motion().expect("demo motion").is_playing());
+    h.key_press(egui::Key::Num3);
+    h.run_steps(2);
+    let yaw = h.state_mut().orbit_mut().yaw_rad.to_degrees();
+    assert!((yaw - 90.0).abs() < 1e-3, "side view: {yaw}");
+    h.key_press(egui::Key::F1);
+    h.run_steps(2);
+    h.get_by_label("play / pause the motion");
+    h.get_by_label("right or middle drag");
+}
+
+/// eframe storage as a map, to check what is remembered between runs.
+#[derive(Default)]
+struct Memory(std::collections::HashMap<String, String>);
+
+impl eframe::Storage for Memory {
+    fn get_string(&self, key: &str) -> Option<String> {
+        self.0.get(key).cloned()
+    }
+    fn set_string(&mut self, key: &str, value: String) {
+        self.0.insert(key.into(), value);
+    }
+    fn remove_string(&mut self, key: &str) {
+        self.0.remove(key);
+    }
+    fn flush(&mut self) {}
+}
+
+/// The look, the export settings and recently opened files come back on the next run.
+#[test]
+fn settings_and_recent_files_are_remembered() {
+    let mut h = harness(Options::default());
+    h.run();
+    let motion = std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../assets/demo_motion.json"
+    ))
+    .canonicalize()
+    .expect("demo motion");
+    h.state_mut().open(motion.clone());
+    wait_until(&mut h, |app| !app.busy());
+    assert_eq!(h.state().recent_files(), std::slice::from_ref(&motion));
+    let settings = h.state_mut().export_settings();
+    (settings.width, settings.height, settings.fps) = (640, 360, 12.0);
+    let mut memory = Memory::default();
+    eframe::App::save(h.state_mut(), &mut memory);
+
+    let mut next = harness(Options::default());
+    next.run();
+    assert!(next.state().recent_files().is_empty());
+    next.state_mut().restore_settings(&memory);
+    assert_eq!(next.state().recent_files(), [motion]);
+    let settings = next.state_mut().export_settings();
+    assert_eq!(
+        (settings.width, settings.height, settings.fps),
+        (640, 360, 12.0)
+    );
+}

@@ -4,15 +4,7 @@
 use guava::camera::Camera;
 
 use crate::app::{CameraMode, GuavaApp, View};
-use crate::orbit::OrbitCamera;
-
-/// Orbit presets around the subject: its front, three-quarter, side and back (yaw, degrees).
-const VIEWS: [(&str, f32); 4] = [
-    ("Front", 0.0),
-    ("Three-quarter", 35.0),
-    ("Side", 90.0),
-    ("Back", 180.0),
-];
+use crate::orbit::{OrbitCamera, VIEWS};
 
 impl GuavaApp {
     pub(crate) fn camera_ui(&mut self, ui: &mut egui::Ui) {
@@ -34,10 +26,13 @@ impl GuavaApp {
         });
         let mut moved = false;
         ui.horizontal(|ui| {
-            for (name, yaw_deg) in VIEWS {
-                if ui.button(name).clicked() {
-                    self.orbit.yaw_rad = yaw_deg.to_radians();
-                    self.orbit.pitch_rad = 0.0;
+            for (i, (name, _)) in VIEWS.iter().enumerate() {
+                if ui
+                    .button(*name)
+                    .on_hover_text(format!("key {}", i + 1))
+                    .clicked()
+                {
+                    self.set_view_preset(i);
                     moved = true;
                 }
             }

@@ -14,21 +14,24 @@ impl GuavaApp {
     pub(crate) fn menu_ui(&mut self, ui: &mut egui::Ui) {
         egui::MenuBar::new().ui(ui, |ui| {
             ui.menu_button("File", |ui| {
-                if ui.button("Open…").clicked() {
-                    if let Some(path) = rfd::FileDialog::new()
-                        .add_filter(
-                            "Splats (PLY, .splat), body template, avatar, photo or motion",
-                            &[
-                                "ply", "splat", "glb", "guava", "png", "jpg", "jpeg", "json",
-                                "csv", "npz",
-                            ],
-                        )
-                        .pick_file()
-                    {
-                        self.open(path);
-                    }
+                if ui.button("Open…").on_hover_text("Ctrl+O").clicked() {
+                    self.open_dialog();
                     ui.close();
                 }
+                ui.add_enabled_ui(!self.recent.is_empty(), |ui| {
+                    ui.menu_button("Open recent", |ui| {
+                        let mut chosen = None;
+                        for path in &self.recent {
+                            if ui.button(path.display().to_string()).clicked() {
+                                chosen = Some(path.clone());
+                            }
+                        }
+                        if let Some(path) = chosen {
+                            self.open(path);
+                            ui.close();
+                        }
+                    });
+                });
                 if ui.button("Open GUAVA networks folder…").clicked() {
                     if let Some(dir) = rfd::FileDialog::new().pick_folder() {
                         self.open(dir);
@@ -82,7 +85,28 @@ impl GuavaApp {
                     ui.close();
                 }
             });
+            ui.menu_button("Help", |ui| {
+                if ui.button("Shortcuts and mouse").on_hover_text("F1").clicked() {
+                    self.help = true;
+                    ui.close();
+                }
+            });
         });
+    }
+
+    /// Picks a file to open.
+    pub(crate) fn open_dialog(&mut self) {
+        if let Some(path) = rfd::FileDialog::new()
+            .add_filter(
+                "Splats (PLY, .splat), body template, avatar, photo or motion",
+                &[
+                    "ply", "splat", "glb", "guava", "png", "jpg", "jpeg", "json", "csv", "npz",
+                ],
+            )
+            .pick_file()
+        {
+            self.open(path);
+        }
     }
 
     /// The running job with its stage and Cancel, else the last message.

@@ -1,0 +1,105 @@
+//! What the viewer remembers between runs (eframe's storage; nothing in tests, which have none):
+//! the look (background, refiner on or off, resolution while interacting, field of view), the
+//! export settings and the files opened recently.
+
+use std::path::PathBuf;
+
+use crate::app::GuavaApp;
+use crate::exports::CameraPath;
+
+const KEY: &str = "guava-rs settings";
+/// Recent files kept, newest first.
+pub const RECENT: usize = 8;
+
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct Settings {
+    background: [f32; 3],
+    refine: bool,
+    interactive_scale: Option<f32>,
+    fov_deg: f32,
+    export_size: [u32; 2],
+    export_fps: f32,
+    export_gif: bool,
+    export_turntable: bool,
+    recent: Vec<PathBuf>,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            background: [0.0; 3],
+            refine: true,
+            interactive_scale: None,
+            fov_deg: 50.0,
+            export_size: [1024, 1024],
+            export_fps: 30.0,
+            export_gif: true,
+            export_turntable: false,
+            recent: Vec::new(),
+        }
+    }
+}
+
+impl Settings {
+    pub fn load(storage: &dyn eframe::Storage) -> Option<Self> {
+        eframe::get_value(storage, KEY)
+    }
+
+    pub fn save(app: &GuavaApp, storage: &mut dyn eframe::Storage) {
+        let e = &app.export;
+        let settings = Self {
+            background: app.background,
+            refine: app.refined.enabled,
+            interactive_scale: Some(app.interaction.scale),
+            fov_deg: app.orbit.fov_y_rad.to_degrees(),
+            export_size: [e.width, e.height],
+            export_fps: e.fps,
+            export_gif: e.gif,
+            export_turntable: e.path == CameraPath::Turntable,
+            recent: app.recent.clone(),
+        };
+        eframe::set_value(storage, KEY, &settings);
+    }
+
+    /// Puts the remembered values on a new app (values out of range are left as they are).
+    pub fn apply(self, app: &mut GuavaApp) {
+        if self.background.iter().all(|c| (0.0..=1.0).contains(c)) {
+            app.background = self.background;
+        }
+        app.refined.enabled = self.refine;
+        if let Some(s) = self.interactive_scale.filter(|s| *s > 0.0 && *s <= 1.0) {
+            app.interaction.scale = s;
+        }
+        if self.fov_deg > 1.0 && self.fov_deg < 170.0 {
+            app.orbit.fov_y_rad = self.fov_deg.to_radians();
+        }
+        let e = &mut app.export;
+        let [w, h] = self.export_size;
+        if (16..=8192).contains(&w) && (16..=8192).contains(&h) {
+            (e.width, e.height) = (w, h);
+        }
+        if self.export_fps >= 1.0 && self.export_fps <= 120.0 {
+            e.fps = self.export_fps;
+        }
+        e.gif = self.export_gif;
+        if self.export_turntable {
+            e.path = CameraPath::Turntable;
+        }
+        app.recent = self.recent.into_iter().take(RECENT).collect();
+    }
+}
+
+impl GuavaApp {
+    /// Puts `path` first among the recent files.
+    pub(crate) fn remember(&mut self, path: PathBuf) {
+        self.recent.retain(|p| *p != path);
+        self.recent.insert(0, path);
+        self.recent.truncate(RECENT);
+    }
+
+    /// Files opened recently, newest first.
+    pub fn recent_files(&self) -> &[PathBuf] {
+        &self.recent
+    }
+}
