@@ -339,6 +339,12 @@ impl GuavaApp {
         self.refined.frames
     }
 
+    /// Compare mode: the raw splat left of `split` (a share of the width), refined right of it;
+    /// `None` shows the refined frame whole.
+    pub fn set_compare(&mut self, split: Option<f32>) {
+        self.refined.split = split.map(|s| s.clamp(0.0, 1.0));
+    }
+
     /// Whether the viewport's last frame showed the refined image (else the raw splat).
     pub fn showing_refined(&self) -> bool {
         self.refined.showing

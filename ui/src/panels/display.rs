@@ -54,6 +54,23 @@ impl GuavaApp {
                  subjects, for default reconstructions; GUAVA's, from its networks folder, for \
                  GUAVA-mode avatars); the raw splat image is shown meanwhile",
             );
+        let mut compare = self.refined.split.is_some();
+        ui.horizontal(|ui| {
+            ui.add_enabled(
+                self.refined.enabled,
+                egui::Checkbox::new(&mut compare, "compare raw | refined"),
+            );
+            if compare {
+                let split = self.refined.split.get_or_insert(0.5);
+                ui.add(
+                    egui::Slider::new(split, 0.0..=1.0)
+                        .show_value(false)
+                        .text("split"),
+                );
+            } else {
+                self.refined.split = None;
+            }
+        });
         if let Some(ms) = self.refined.last_ms {
             ui.label(format!(
                 "last refined frame: {ms:.0} ms (draw, read back, ONNX Runtime on the CPU)"

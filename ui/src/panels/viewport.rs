@@ -113,8 +113,29 @@ impl GuavaApp {
         // The refined frame covers the splat it was made from. The splatting view still gets its
         // frame: unchanged, it draws nothing new, and its counters keep reaching the HUD.
         if let Some(texture) = refined {
-            let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
-            ui.painter().image(texture, rect, uv, egui::Color32::WHITE);
+            // Compare: the raw splat left of the split, the refined frame right of it.
+            let split = self.refined.split.unwrap_or(0.0);
+            let x = egui::lerp(rect.x_range(), split);
+            let shown = egui::Rect::from_min_max(egui::pos2(x, rect.top()), rect.max);
+            let uv = egui::Rect::from_min_max(egui::pos2(split, 0.0), egui::pos2(1.0, 1.0));
+            ui.painter().image(texture, shown, uv, egui::Color32::WHITE);
+            if self.refined.split.is_some() {
+                let painter = ui.painter();
+                let line = egui::Stroke::new(1.5, egui::Color32::from_gray(230));
+                painter.vline(x, rect.y_range(), line);
+                for (text, at, align) in [
+                    ("raw splat", x - 8.0, egui::Align2::RIGHT_TOP),
+                    ("refined", x + 8.0, egui::Align2::LEFT_TOP),
+                ] {
+                    painter.text(
+                        egui::pos2(at, rect.top() + 8.0),
+                        align,
+                        text,
+                        egui::FontId::proportional(14.0),
+                        egui::Color32::from_gray(230),
+                    );
+                }
+            }
         }
         self.demo_hint(ui, rect);
     }
