@@ -36,6 +36,9 @@ pub struct Options {
     pub autoplay: bool,
     /// Start paused at this time of the motion (seconds), e.g. for scripted screenshots.
     pub motion_time: Option<f32>,
+    /// Destroy the GPU device this many seconds after launch (fault injection: what a driver
+    /// reset does; the window must not hang and the user's avatar must be saved).
+    pub lose_device_after: Option<f32>,
     /// With nothing else to open, start on the demo portrait's avatar (the window does; tests
     /// start on the bare body).
     pub demo_avatar: bool,
@@ -161,6 +164,7 @@ impl GuavaApp {
                 let info = rs.adapter.get_info();
                 let view = ViewRenderer::new(&rs.device, &rs.queue, &info, rs.target_format);
                 rs.renderer.write().callback_resources.insert(view);
+                crate::recovery::watch(&rs.device);
                 Gpu {
                     ready: true,
                     adapter: guava::gpu::adapter_label(&info),
@@ -378,6 +382,17 @@ impl GuavaApp {
         if self.clock.frames == 3 {
             // The real-window test waits for this line before taking its own screenshot.
             println!("guava-viewer: ready");
+        }
+        if let (Some(secs), Some(offscreen)) = (self.options.lose_device_after, &self.gpu.offscreen)
+            && self.clock.launched.elapsed().as_secs_f32() >= secs
+            && self.job.is_none()
+            && self.queue.is_empty()
+        {
+            // Fault injection: the device destroyed as a driver reset would (once what was
+            // asked to open has opened).
+            let mut offscreen = offscreen.lock().unwrap_or_else(|e| e.into_inner());
+            offscreen.renderer().gpu.device.destroy();
+            self.options.lose_device_after = None;
         }
         let Some(secs) = self.options.exit_after_secs else {
             return;

@@ -283,6 +283,9 @@ impl GuavaApp {
             source_camera,
             fidelity,
         ));
+        if let Some(state) = &self.avatar {
+            crate::recovery::keep(state.avatar.clone());
+        }
         self.camera_mode = match first_launch && source_camera.is_some() {
             true => CameraMode::Source,
             false => CameraMode::Orbit,
@@ -450,10 +453,17 @@ impl GuavaApp {
         else {
             return;
         };
-        match state.avatar.save(&path) {
-            Ok(()) => self.info(format!("saved {}", path.display())),
-            Err(e) => self.error(e.to_string()),
+        if let Err(e) = self.save_avatar(&path) {
+            self.error(e);
         }
+    }
+
+    /// Writes the avatar shown to `path` (atomically: the old file stays if this fails).
+    pub fn save_avatar(&mut self, path: &Path) -> Result<(), String> {
+        let avatar = &self.avatar.as_ref().ok_or("no avatar to save")?.avatar;
+        avatar.save(path).map_err(|e| e.to_string())?;
+        self.info(format!("saved {}", path.display()));
+        Ok(())
     }
 
     pub(crate) fn save_ply_dialog(&mut self) {

@@ -14,6 +14,7 @@ mod offscreen;
 pub mod orbit;
 mod panels;
 pub mod pose_controls;
+pub mod recovery;
 mod refined;
 mod settings;
 mod shortcuts;

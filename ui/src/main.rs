@@ -24,6 +24,10 @@ struct Args {
     /// Start with the motion paused at this time (seconds) instead of playing.
     #[arg(long)]
     motion_time: Option<f32>,
+    /// Fault injection: destroy the GPU device this many seconds after launch, as a driver
+    /// reset would (the viewer saves your avatar and exits with a message).
+    #[arg(long, hide = true)]
+    lose_device_after: Option<f32>,
 }
 
 fn main() {
@@ -44,8 +48,10 @@ fn main() {
         exit_after_secs: args.exit_after_secs,
         autoplay: true,
         motion_time: args.motion_time,
+        lose_device_after: args.lose_device_after,
         demo_avatar: true,
     };
+    guava_ui::recovery::install_panic_hook();
     let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
     // The splatting pass needs more than egui's default limits; ask for them on egui's own device.
     setup.device_descriptor = Arc::new(guava::gpu::device_descriptor);

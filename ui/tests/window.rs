@@ -129,6 +129,65 @@ fn the_viewer_window_shows_the_scene_and_exits_cleanly() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A GPU device lost mid-session (destroyed by the viewer's fault injection, as a driver reset
+/// would): no hang and no bare backtrace; the viewer says so, writes the avatar on screen to its
+/// recovery file and exits with status 3.
+#[test]
+fn a_lost_device_saves_the_avatar_and_exits_with_a_message() {
+    use guava::pipeline::{Mode, Photo, Pipeline, Tracked};
+    let xvfb = Xvfb::start();
+    let dir = std::env::temp_dir().join(format!("guava-window-lost-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let photo = root.join("assets/demo_portrait.png");
+    let body = guava::body::BodyModel::default_body().expect("default body");
+    let outcome = Pipeline::default()
+        .reconstruct(
+            Mode::Default(&body),
+            Photo::File(&photo),
+            Tracked::beside(&photo),
+            &mut |_| true,
+        )
+        .expect("demo portrait");
+    let avatar = dir.join("demo.guava");
+    outcome.avatar.save(&avatar).expect("avatar");
+
+    let mut viewer = Command::new(env!("CARGO_BIN_EXE_guava-viewer"))
+        .arg(&avatar)
+        .args(["--lose-device-after", "3"])
+        .env("DISPLAY", &xvfb.display)
+        .env("XDG_RUNTIME_DIR", runtime_dir())
+        .env("XDG_DATA_HOME", &dir)
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("guava-viewer starts");
+    let start = Instant::now();
+    let exit = loop {
+        if let Some(status) = viewer.try_wait().expect("wait") {
+            break status;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(180),
+            "the viewer hung after losing its device"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut viewer.stderr.take().expect("stderr"), &mut stderr).ok();
+    assert_eq!(exit.code(), Some(3), "{stderr}");
+    assert!(stderr.contains("the GPU device was lost"), "{stderr}");
+    let recovered = dir.join("guava-rs/recovered.guava");
+    assert!(
+        stderr.contains(&recovered.display().to_string()),
+        "{stderr}"
+    );
+    let saved = guava::avatar::Avatar::load(&recovered).expect("the recovered avatar loads");
+    assert_eq!(saved.uv.local.len(), outcome.avatar.uv.local.len());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// The window fills the 1280×800 screen: a UI panel on the left, the splatted scene on the right.
 fn check_screenshot(path: &Path) {
     let img = image::open(path)
