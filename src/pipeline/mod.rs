@@ -157,9 +157,10 @@ pub struct Outcome {
 }
 
 /// What a session keeps between photos: the keypoint models and the last body's UV map.
-#[derive(Default)]
 pub struct Pipeline {
     pub keypoints: KeypointModels,
+    /// The default reconstruction's UV map side (a quality knob: texels become Gaussians).
+    pub uv_size: u32,
     uv: Option<(UvKey, Arc<UvMap>)>,
 }
 
@@ -171,10 +172,17 @@ struct UvKey {
     size: u32,
 }
 
+impl Default for Pipeline {
+    fn default() -> Self {
+        Self::new(KeypointModels::default())
+    }
+}
+
 impl Pipeline {
     pub fn new(keypoints: KeypointModels) -> Self {
         Self {
             keypoints,
+            uv_size: DEFAULT_UV_SIZE,
             uv: None,
         }
     }
@@ -349,8 +357,9 @@ impl Pipeline {
         let photo = with_person_mask(read.image, read.detections.as_ref());
         let (avatar, core) = match mode {
             Mode::Default(body) => {
-                let uv = self.uv_map(body.name(), body.vertex_count(), DEFAULT_UV_SIZE, || {
-                    UvMap::for_body(body, DEFAULT_UV_SIZE)
+                let size = self.uv_size;
+                let uv = self.uv_map(body.name(), body.vertex_count(), size, || {
+                    UvMap::for_body(body, size)
                 });
                 reconstruct_default(body, &uv, &view, photo.clone(), &source_name, progress)?
             }

@@ -66,24 +66,41 @@ impl SourceView {
         body: &impl Posable,
         file: &str,
     ) -> Result<Self, TrackingError> {
-        if tracking.frames.is_empty() {
+        Self::at_frame(tracking, body, 0, file)
+    }
+
+    /// Frame `frame` of `tracking` as [`Self::from_tracking`] reads frame 0 (a tracked video's
+    /// frames, for self-reenactment).
+    pub fn at_frame(
+        tracking: &Tracking,
+        body: &impl Posable,
+        frame: usize,
+        file: &str,
+    ) -> Result<Self, TrackingError> {
+        let Some(tracked) = tracking.frames.get(frame) else {
             return Err(TrackingError {
                 file: file.into(),
                 frame: None,
                 field: "frames".into(),
-                problem: "has no frame".into(),
+                problem: format!(
+                    "has {} frames, frame {frame} was asked for",
+                    tracking.frames.len()
+                ),
             });
-        }
-        let (w2c, invtanfov) = camera_at(tracking, 0.0).ok_or_else(|| TrackingError {
-            file: file.into(),
-            frame: Some(0),
-            field: "camera".into(),
-            problem: "missing (reconstruction needs the photo's tracked camera)".into(),
-        })?;
+        };
+        let time = frame as f64 / tracking.fps as f64;
+        let (w2c, invtanfov) = camera_at(tracking, time)
+            .filter(|_| tracked.camera.is_some())
+            .ok_or_else(|| TrackingError {
+                file: file.into(),
+                frame: Some(frame),
+                field: "camera".into(),
+                problem: "missing (reconstruction needs the photo's tracked camera)".into(),
+            })?;
         let mut pose = BodyPose::rest(body);
-        Retarget::new(tracking, body).sample(tracking, 0.0, &mut pose);
+        Retarget::new(tracking, body).sample(tracking, time, &mut pose);
         // Validated on loading: the side is positive and every number within ±2²⁰.
-        let crop = tracking.frames[0]
+        let crop = tracked
             .camera
             .and_then(|c| c.crop)
             .map(|[left, top, side]| Crop {

@@ -60,8 +60,18 @@ enum Command {
     /// from GUAVA's camera) and its exact tracking beside it (same name, .json): a known answer
     /// for reconstruction.
     SynthPhoto {
-        #[arg(long)]
-        out: PathBuf,
+        #[arg(long, required_unless_present = "sequence")]
+        out: Option<PathBuf>,
+        /// Write a synthetic video instead: the subject posed along --motion, as
+        /// frame_00000.png, … in this folder with tracking.json (every frame's pose and camera).
+        #[arg(long, conflicts_with = "out", requires = "motion")]
+        sequence: Option<PathBuf>,
+        /// With --sequence: the motion the subject follows.
+        #[arg(long, requires = "sequence")]
+        motion: Option<PathBuf>,
+        /// With --sequence: frames per second.
+        #[arg(long, default_value_t = 5.0, requires = "sequence", value_parser = args::frame_rate)]
+        fps: f32,
         /// Camera yaw around the body in degrees (positive: towards the body's left).
         #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_parser = args::angle)]
         yaw: f32,
@@ -122,9 +132,15 @@ enum Command {
         #[arg(long)]
         avatar: PathBuf,
         /// The photo it was made from.
-        #[arg(long)]
-        image: PathBuf,
-        /// The photo's tracking file, for avatars that do not carry their source view.
+        #[arg(long, required_unless_present = "frames", conflicts_with = "frames")]
+        image: Option<PathBuf>,
+        /// Self-reenactment: a folder of video frames (PNG or JPEG, in name order) tracked by
+        /// --tracking (one tracked frame, with its camera, per image); the avatar is posed and
+        /// seen as each frame and compared with it, as GUAVA's paper measures.
+        #[arg(long, requires = "tracking")]
+        frames: Option<PathBuf>,
+        /// The photo's tracking file, for avatars that do not carry their source view (with
+        /// --frames: the video's tracking).
         #[arg(long)]
         tracking: Option<PathBuf>,
         /// The EHM body (tools/convert_ehm.py) a GUAVA-mode avatar is bound to.
@@ -202,7 +218,18 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info => info(),
         Command::Render(args) => render::run(*args),
-        Command::SynthPhoto { out, yaw, subject } => photo::synth_photo(&out, yaw, subject),
+        Command::SynthPhoto {
+            out,
+            sequence,
+            motion,
+            fps,
+            yaw,
+            subject,
+        } => match (out, sequence, motion) {
+            (_, Some(dir), Some(motion)) => photo::synth_sequence(&dir, yaw, subject, &motion, fps),
+            (Some(out), ..) => photo::synth_photo(&out, yaw, subject),
+            _ => anyhow::bail!("give --out, or --sequence with --motion"),
+        },
         Command::Report(args) => report::report(&args),
         Command::RefinerPairs { out, split } => refiner::write_pairs(
             &out,
@@ -233,18 +260,26 @@ fn run(cli: Cli) -> Result<()> {
         Command::Eval {
             avatar,
             image,
+            frames,
             tracking,
             ehm,
             out,
             keypoints,
-        } => photo::eval(
-            &avatar,
-            &image,
-            tracking.as_deref(),
-            ehm.as_deref(),
-            out.as_deref(),
-            &keypoints,
-        ),
+        } => {
+            let target = match (image, frames) {
+                (_, Some(dir)) => photo::Target::Frames(dir),
+                (Some(image), None) => photo::Target::Photo(image),
+                (None, None) => anyhow::bail!("give --image or --frames"),
+            };
+            photo::eval(
+                &avatar,
+                &target,
+                tracking.as_deref(),
+                ehm.as_deref(),
+                out.as_deref(),
+                &keypoints,
+            )
+        }
         Command::Motion { file, out, ehm } => motion(&file, out.as_deref(), ehm.as_deref()),
         Command::Bench { which } => match which {
             Bench::Splat(args) => bench::splat(&args),

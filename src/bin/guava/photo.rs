@@ -222,9 +222,17 @@ fn write_fit_overlay(
 
 /// Compares an avatar, re-rendered from its photo's view, with the photo; prints the metrics on
 /// one line, and with `out` writes photo | render | difference as PNG.
+/// What `guava eval` compares the avatar with.
+pub enum Target {
+    /// The photo it was made from (seen from its source view).
+    Photo(PathBuf),
+    /// A tracked video's frames, in name order (self-reenactment).
+    Frames(PathBuf),
+}
+
 pub fn eval(
     avatar: &Path,
-    image: &Path,
+    target: &Target,
     tracking: Option<&Path>,
     ehm: Option<&Path>,
     out: Option<&Path>,
@@ -235,12 +243,12 @@ pub fn eval(
         Some(path) => {
             let mut body = EhmModel::load(path)?;
             avatar_file.apply_ehm_identity(&mut body);
-            eval_on(&avatar_file, &body, image, tracking, out, keypoints)
+            eval_on(&avatar_file, &body, target, tracking, out, keypoints)
         }
         None => eval_on(
             &avatar_file,
             &BodyModel::default_body()?,
-            image,
+            target,
             tracking,
             out,
             keypoints,
@@ -252,12 +260,21 @@ pub fn eval(
 fn eval_on(
     avatar: &guava::avatar::Avatar,
     body: &impl guava::body::Posable,
-    image: &Path,
+    target: &Target,
     tracking: Option<&Path>,
     out: Option<&Path>,
     keypoints: &KeypointArgs,
 ) -> Result<()> {
     avatar.check_body(body).map_err(anyhow::Error::msg)?;
+    let mut pipeline = keypoints.pipeline();
+    let mut renderer = guava::render::HeadlessRenderer::new(guava::gpu::GpuContext::headless()?);
+    let image = match target {
+        Target::Frames(dir) => {
+            let path = tracking.expect("clap requires --tracking with --frames");
+            return reenact(avatar, body, dir, path, &mut pipeline, &mut renderer);
+        }
+        Target::Photo(image) => image,
+    };
     let view = match tracking {
         Some(path) => {
             let t = guava::tracking::Tracking::load(path)?;
@@ -268,10 +285,7 @@ fn eval_on(
             .clone()
             .ok_or(guava::eval::EvalError::NoSourceView)?,
     };
-    let photo = keypoints
-        .pipeline()
-        .masked_photo(Photo::File(image), &view, &mut |_| true)?;
-    let mut renderer = guava::render::HeadlessRenderer::new(guava::gpu::GpuContext::headless()?);
+    let photo = pipeline.masked_photo(Photo::File(image), &view, &mut |_| true)?;
     let (metrics, rendered) =
         guava::eval::evaluate(&mut renderer, avatar, body, Some(&view), &photo)?;
     println!("{metrics}");
@@ -279,6 +293,62 @@ fn eval_on(
         guava::render::save_png(&guava::eval::side_by_side(&photo, &rendered), path)?;
         println!("photo | render | difference → {}", path.display());
     }
+    Ok(())
+}
+
+/// Self-reenactment: every frame of a tracked video against the avatar posed and seen as that
+/// frame (its tracked pose and camera, with the avatar's identity); one line per frame, then
+/// the means.
+fn reenact(
+    avatar: &guava::avatar::Avatar,
+    body: &impl guava::body::Posable,
+    dir: &Path,
+    tracking: &Path,
+    pipeline: &mut guava::pipeline::Pipeline,
+    renderer: &mut guava::render::HeadlessRenderer,
+) -> Result<()> {
+    let t = guava::tracking::Tracking::load(tracking)?;
+    let mut frames: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| dir.display().to_string())?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| ["png", "jpg", "jpeg"].contains(&e.to_ascii_lowercase().as_str()))
+        })
+        .collect();
+    frames.sort();
+    if frames.len() != t.frames.len() {
+        anyhow::bail!(
+            "{}: {} images, but {} tracks {} frames (one tracked frame per image)",
+            dir.display(),
+            frames.len(),
+            tracking.display(),
+            t.frames.len()
+        );
+    }
+    let file = tracking.display().to_string();
+    let mut sums = [0.0f64; 4];
+    for (i, frame) in frames.iter().enumerate() {
+        let mut view = SourceView::at_frame(&t, body, i, &file)?;
+        avatar.apply_identity(body, &mut view.pose);
+        let photo = pipeline.masked_photo(Photo::File(frame), &view, &mut |_| true)?;
+        let (m, _) = guava::eval::evaluate(renderer, avatar, body, Some(&view), &photo)
+            .with_context(|| frame.display().to_string())?;
+        println!("frame {i}: {m}");
+        for (s, v) in sums.iter_mut().zip([m.iou, m.psnr, m.ssim, m.l1]) {
+            *s += v;
+        }
+    }
+    let n = frames.len().max(1) as f64;
+    println!(
+        "mean over {} frames: iou={:.4} psnr={:.2} ssim={:.4} l1={:.4}",
+        frames.len(),
+        sums[0] / n,
+        sums[1] / n,
+        sums[2] / n,
+        sums[3] / n
+    );
     Ok(())
 }
 
@@ -294,32 +364,13 @@ pub enum SubjectName {
 /// Writes a synthetic photo of the default body (bare with a colour pattern, or a subject with
 /// clothing or hair) and its exact tracking beside it.
 pub fn synth_photo(out: &Path, yaw: f32, subject: SubjectName) -> Result<()> {
-    use guava::synthetic::{self, Subject};
     let body = BodyModel::default_body()?;
     let view = SourceView {
         pose: BodyPose::rest(&body),
-        camera: synthetic::upper_body_camera(&body, yaw.to_radians()),
+        camera: guava::synthetic::upper_body_camera(&body, yaw.to_radians()),
         crop: None,
     };
-    let image = match subject {
-        SubjectName::Bare => {
-            synthetic::photo(&body, &view.pose, &view.camera, synthetic::banded_texture)?
-        }
-        other => {
-            let subject = match other {
-                SubjectName::Clothed => Subject::clothed(&body),
-                SubjectName::Haired => Subject::haired(&body),
-                _ => Subject::clothed_and_haired(&body),
-            };
-            subject.photo(&view.pose, &view.camera, synthetic::subject_texture)?
-        }
-    };
-    guava::atomic_file::write_atomic(out, |w| {
-        image
-            .write_to(w, image::ImageFormat::Png)
-            .map_err(std::io::Error::other)
-    })
-    .with_context(|| format!("writing {}", out.display()))?;
+    save_image(&synth_image(&body, subject, &view)?, out)?;
     let tracking_path = tracking_beside(out);
     let name = out.file_name().unwrap_or_default().to_string_lossy();
     view.to_tracking(
@@ -333,4 +384,88 @@ pub fn synth_photo(out: &Path, yaw: f32, subject: SubjectName) -> Result<()> {
         tracking_path.display()
     );
     Ok(())
+}
+
+/// A synthetic video: the subject posed along `motion` at `fps`, seen by the upper-body camera
+/// at `yaw`, as `frame_00000.png`, … in `dir` with `tracking.json` (every frame's pose and
+/// camera): a known answer for self-reenactment (`guava eval --frames`).
+pub fn synth_sequence(
+    dir: &Path,
+    yaw: f32,
+    subject: SubjectName,
+    motion: &Path,
+    fps: f32,
+) -> Result<()> {
+    let body = BodyModel::default_body()?;
+    let t = guava::tracking::import::open_motion(motion)?.tracking;
+    let retarget = guava::tracking::Retarget::new(&t, &body);
+    let camera = guava::synthetic::upper_body_camera(&body, yaw.to_radians());
+    std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+    let source = format!(
+        "synthetic video (guava synth-photo --sequence, {subject:?}, {} at {fps} fps)",
+        motion.display()
+    );
+    let mut tracking: Option<guava::tracking::Tracking> = None;
+    let times = guava::render::sequence::frame_times(t.duration(), fps);
+    for (i, &time) in times.iter().enumerate() {
+        let mut pose = BodyPose::rest(&body);
+        retarget.sample(&t, time, &mut pose);
+        let view = SourceView {
+            pose,
+            camera,
+            crop: None,
+        };
+        save_image(
+            &synth_image(&body, subject, &view)?,
+            &guava::render::sequence::frame_path(dir, i),
+        )?;
+        let frame = view.to_tracking(&body, &source);
+        match &mut tracking {
+            Some(all) => all.frames.extend(frame.frames),
+            None => tracking = Some(frame),
+        }
+        eprint!("\rframe {}/{}", i + 1, times.len());
+    }
+    eprintln!();
+    let mut tracking = tracking.ok_or_else(|| anyhow::anyhow!("the motion has no frame"))?;
+    tracking.fps = fps;
+    let path = dir.join("tracking.json");
+    tracking.save(&path)?;
+    println!(
+        "wrote {} frames of {} and their tracking {}",
+        times.len(),
+        dir.display(),
+        path.display()
+    );
+    Ok(())
+}
+
+fn synth_image(
+    body: &BodyModel,
+    subject: SubjectName,
+    view: &SourceView,
+) -> Result<image::RgbaImage> {
+    use guava::synthetic::{self, Subject};
+    Ok(match subject {
+        SubjectName::Bare => {
+            synthetic::photo(body, &view.pose, &view.camera, synthetic::banded_texture)?
+        }
+        other => {
+            let subject = match other {
+                SubjectName::Clothed => Subject::clothed(body),
+                SubjectName::Haired => Subject::haired(body),
+                _ => Subject::clothed_and_haired(body),
+            };
+            subject.photo(&view.pose, &view.camera, synthetic::subject_texture)?
+        }
+    })
+}
+
+fn save_image(image: &image::RgbaImage, out: &Path) -> Result<()> {
+    guava::atomic_file::write_atomic(out, |w| {
+        image
+            .write_to(w, image::ImageFormat::Png)
+            .map_err(std::io::Error::other)
+    })
+    .with_context(|| format!("writing {}", out.display()))
 }

@@ -72,17 +72,35 @@ pub fn report(args: &ReportArgs) -> Result<()> {
     let machine = format!("{}; CPU {}", renderer.gpu.adapter_label(), cpu_name());
     eprintln!("report: {machine}");
 
-    // The subject every section draws: jacket and hair, reconstructed from its front photo.
+    // The subject every section draws: jacket and hair, reconstructed from its front photo at
+    // the default UV side (first) and at the other sides the sweep compares.
     let subject = Subject::clothed_and_haired(&body);
-    let outcome =
+    let other_sides: &[u32] = if args.quick { &[128] } else { &[128, 256, 512] };
+    let mut candidates = Vec::new();
+    for uv in
+        std::iter::once(guava::reconstruct::DEFAULT_UV_SIZE).chain(other_sides.iter().copied())
+    {
+        pipeline.uv_size = uv;
+        // Once to build the UV map (kept by the pipeline for its side), once timed.
         guava::eval::subjects::reconstruct_subject(&mut pipeline, &subject, subject_texture)?;
+        let started = std::time::Instant::now();
+        let outcome =
+            guava::eval::subjects::reconstruct_subject(&mut pipeline, &subject, subject_texture)?;
+        candidates.push(tradeoffs::Candidate {
+            uv,
+            reconstruct_ms: started.elapsed().as_secs_f64() * 1e3,
+            avatar: outcome.avatar,
+        });
+    }
+    pipeline.uv_size = guava::reconstruct::DEFAULT_UV_SIZE;
+    let avatar = &candidates[0].avatar;
 
     eprintln!("report: error against run time");
-    let trade = tradeoffs::run(&mut renderer, &subject, &outcome.avatar, args.quick)?;
+    let trade = tradeoffs::run(&mut renderer, &subject, &candidates, args.quick)?;
     eprintln!("report: stability");
-    let stable = stability::run(&mut renderer, &mut pipeline, &body, &outcome.avatar)?;
+    let stable = stability::run(&mut renderer, &mut pipeline, &body, avatar)?;
     eprintln!("report: leaving work out");
-    let saved = savings::run(&mut renderer, &body, &outcome.avatar, args.quick)?;
+    let saved = savings::run(&mut renderer, &body, avatar, args.quick)?;
 
     let write = |name: &str, text: &str| -> Result<()> {
         let path = out.join(name);

@@ -1,5 +1,6 @@
 //! Error against run time: the avatar drawn with each combination of the knobs that trade one
-//! for the other — which Gaussians (all; template only; UV only; the coarse stand-in the viewer
+//! for the other — the UV map's side (reconstructed again for each), which Gaussians (all;
+//! template only; UV only; UV Gaussians pruned below an opacity; the coarse stand-in the viewer
 //! draws while interacting), the output side, the refiner on or off — timed pose → pixels and
 //! compared with the subject's ground truth; at the smallest side the splatting pass is also
 //! checked against the f64 reference on the same Gaussians (the pass's own error).
@@ -24,7 +25,14 @@ pub struct Tradeoffs {
 }
 
 /// Which Gaussians are drawn.
-const CONTENTS: [&str; 4] = ["all", "template only", "UV only", "coarse stand-in"];
+const CONTENTS: [&str; 6] = [
+    "all",
+    "template only",
+    "UV only",
+    "UV pruned below opacity 0.5",
+    "UV pruned below opacity 0.9",
+    "coarse stand-in",
+];
 
 fn variant(avatar: &Avatar, which: usize) -> Avatar {
     let mut a = avatar.clone();
@@ -34,16 +42,55 @@ fn variant(avatar: &Avatar, which: usize) -> Avatar {
             a.outside = 0;
         }
         2 => a.template = LocalGaussians::default(),
-        3 => a = avatar.preview(),
+        3 => prune(&mut a, 0.5),
+        4 => prune(&mut a, 0.9),
+        5 => a = avatar.preview(),
         _ => {}
     }
     a
 }
 
+/// Drops the UV Gaussians fainter than `opacity` (template Gaussians are bound one per vertex
+/// and stay); those on parts the photo did not show stay last, counted.
+fn prune(avatar: &mut Avatar, opacity: f32) {
+    let uv = &avatar.uv;
+    let first_outside = uv.local.opacities.len() - avatar.outside;
+    let keep: Vec<usize> = (0..uv.local.opacities.len())
+        .filter(|&i| uv.local.opacities[i] >= opacity)
+        .collect();
+    let c = avatar.channels;
+    let local = &uv.local;
+    let pruned = UvGaussians {
+        triangles: keep.iter().map(|&i| uv.triangles[i]).collect(),
+        barycentrics: keep.iter().map(|&i| uv.barycentrics[i]).collect(),
+        offsets: keep.iter().map(|&i| uv.offsets[i]).collect(),
+        local: LocalGaussians {
+            rotations: keep.iter().map(|&i| local.rotations[i]).collect(),
+            scales: keep.iter().map(|&i| local.scales[i]).collect(),
+            opacities: keep.iter().map(|&i| local.opacities[i]).collect(),
+            features: keep
+                .iter()
+                .flat_map(|&i| local.features[i * c..(i + 1) * c].iter().copied())
+                .collect(),
+        },
+    };
+    avatar.outside = keep.iter().filter(|&&i| i >= first_outside).count();
+    avatar.uv = pruned;
+}
+
+/// An avatar of the subject made at one UV map side, and how long making it took.
+pub struct Candidate {
+    pub uv: u32,
+    pub reconstruct_ms: f64,
+    pub avatar: Avatar,
+}
+
+/// `candidates[0]` is drawn with every choice of Gaussians; the others (other UV sides) with
+/// all of them.
 pub fn run(
     renderer: &mut HeadlessRenderer,
     subject: &Subject,
-    avatar: &Avatar,
+    candidates: &[Candidate],
     quick: bool,
 ) -> Result<Tradeoffs> {
     let body = subject.body;
@@ -65,6 +112,8 @@ pub fn run(
     body.pose(&pose, &mut posed)?;
     let mut table = Table {
         header: vec![
+            "uv",
+            "reconstruct_ms",
             "gaussians",
             "count",
             "side",
@@ -82,8 +131,13 @@ pub fn run(
         rows: Vec::new(),
     };
     let mut points = Vec::new();
-    for (which, name) in CONTENTS.iter().enumerate() {
-        let shown = variant(avatar, which);
+    let runs = candidates.iter().enumerate().flat_map(|(k, c)| {
+        let contents = if k == 0 { CONTENTS.len() } else { 1 };
+        (0..contents).map(move |which| (c, which))
+    });
+    for (candidate, which) in runs {
+        let name = CONTENTS[which];
+        let shown = variant(&candidate.avatar, which);
         // The splatting pass's own error at the smallest side: the same Gaussians (rigged once,
         // on the CPU) through the pass and through the f64 reference. (Against the GPU-rigged
         // frame the difference would also hold the rig's 1e-5 float differences, which flip the
@@ -142,7 +196,8 @@ pub fn run(
                 let total = frame_ms + refine_ms;
                 points.push(Point {
                     label: format!(
-                        "{name}, {side}², {}",
+                        "UV {}², {name}, {side}², {}",
+                        candidate.uv,
                         if refine { "refined" } else { "raw" }
                     ),
                     time_ms: total,
@@ -150,6 +205,8 @@ pub fn run(
                     pareto: false,
                 });
                 table.rows.push(vec![
+                    candidate.uv.to_string(),
+                    format!("{:.0}", candidate.reconstruct_ms),
                     name.to_string(),
                     shown.len().to_string(),
                     side.to_string(),
@@ -184,8 +241,9 @@ pub fn run(
         "Error: PSNR, SSIM and IoU against the subject's ground truth over its box (as `guava \
          eval` measures). vs_f64: the splatting pass against the f64 reference on the same \
          Gaussians at {}² (max absolute difference over every channel and alpha; PSNR of the \
-         channels). frame_ms: posing on the GPU and splatting, without reading back; refine_ms: \
-         the default refiner through ONNX Runtime on the CPU.",
+         channels). uv: the UV map's side the avatar was reconstructed at (reconstruct_ms: how long \
+         that took, photo → avatar). frame_ms: posing on the GPU and splatting, without reading \
+         back; refine_ms: the default refiner through ONNX Runtime on the CPU.",
         sides[0]
     );
     Ok(Tradeoffs {
