@@ -135,6 +135,8 @@ pub struct GuavaApp {
     pub(crate) recent: Vec<PathBuf>,
     /// Whether the help window (shortcuts, mouse) is open.
     pub(crate) help: bool,
+    /// The last `guava report`'s plot, read when its section is first opened.
+    pub(crate) report_plot: Option<crate::report_plot::ReportPlot>,
     pub(crate) background: [f32; 3],
     pub(crate) interaction: Interaction,
     pub(crate) report: Arc<Mutex<ViewReport>>,
@@ -204,6 +206,7 @@ impl GuavaApp {
             export: Default::default(),
             recent: Vec::new(),
             help: false,
+            report_plot: None,
             background: [0.0; 3],
             // A software adapter cannot splat the full viewport at interactive rates.
             interaction: Interaction {

@@ -16,6 +16,7 @@ mod panels;
 pub mod pose_controls;
 pub mod recovery;
 mod refined;
+mod report_plot;
 mod settings;
 mod shortcuts;
 mod viewport;

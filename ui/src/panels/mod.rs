@@ -191,6 +191,17 @@ impl GuavaApp {
         self.display_ui(ui);
         ui.separator();
         self.frame_info_ui(ui);
+        egui::CollapsingHeader::new("Error against time (guava report)")
+            .default_open(false)
+            .show(ui, |ui| {
+                self.report_plot
+                    .get_or_insert_with(|| {
+                        crate::report_plot::ReportPlot::read(
+                            &crate::report_plot::committed_report(),
+                        )
+                    })
+                    .ui(ui);
+            });
     }
 
     fn motion_ui(&mut self, ui: &mut egui::Ui) {
