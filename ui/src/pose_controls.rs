@@ -395,8 +395,10 @@ impl Rig<'_> {
         }
         // FLAME's expression components have no names: the first ten, by number.
         for (i, name) in self.model.parameter_names().enumerate() {
-            if let Some(k) = name.strip_prefix("flame_expression_")
-                && k.parse::<usize>().is_ok_and(|k| k < 10)
+            if let Some(k) = name
+                .strip_prefix("flame_expression_")
+                .and_then(|k| k.parse::<usize>().ok())
+                .filter(|&k| k < 10)
             {
                 controls.push(Control {
                     name: format!("expression component {k}"),

@@ -530,9 +530,17 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
     assert!(label.contains("EHM, GUAVA mode's body"), "{label}");
     h.run();
     assert!(
-        h.query_all_by_label("eyelid_left").count() >= 1,
-        "EHM's sliders are shown"
+        h.query_all_by_label("expression component 0").count() >= 1
+            && h.query_all_by_label("jaw open °").count() >= 1,
+        "EHM's face controls are shown"
     );
+    // The same groups on EHM's SMPL-X names as on the default body's.
+    let groups: Vec<String> = controls(&mut h)
+        .groups
+        .iter()
+        .map(|g| g.name.clone())
+        .collect();
+    assert_eq!(groups, ["Face", "Left hand", "Right hand", "Body"]);
 
     // A broken EHM file is named and the EHM body stays.
     let broken = dir.join("broken_ehm.npz");

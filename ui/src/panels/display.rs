@@ -109,6 +109,9 @@ impl GuavaApp {
     pub(crate) fn frame_info_ui(&self, ui: &mut egui::Ui) {
         ui.heading("Frame");
         let report = self.report();
+        // Wrapped above the grid: a long adapter name must not widen the side panel (the
+        // viewport's size would change under the user).
+        ui.label(format!("adapter: {}", self.gpu.adapter));
         egui::Grid::new("hud")
             .num_columns(2)
             .min_col_width(120.0)
@@ -118,7 +121,6 @@ impl GuavaApp {
                     ui.monospace(v);
                     ui.end_row();
                 };
-                row("adapter", self.gpu.adapter.clone());
                 row("UI frame", format!("{:.1} ms", self.clock.frame_ms));
                 if let Some(body) = &self.body {
                     row("pose (CPU)", format!("{:.1} ms", body.pose_ms));
@@ -131,7 +133,7 @@ impl GuavaApp {
                         }
                         row("GPU splatting", format!("{:.2} ms", ms.iter().sum::<f64>()));
                     }
-                    None => row("GPU stages", "no timestamps on this adapter".into()),
+                    None => row("GPU stages", "no timestamps here".into()),
                 }
                 if let Some(ms) = self.refined.last_ms {
                     row("refine (last)", format!("{ms:.0} ms"));
@@ -166,7 +168,7 @@ impl GuavaApp {
                 if let Some(s) = report.stats {
                     row("Gaussians", s.input.to_string());
                     if let Some(a) = self.avatar.as_ref().filter(|a| !a.show_outside) {
-                        row("left out (unseen parts)", a.avatar.outside.to_string());
+                        row("left out (unseen)", a.avatar.outside.to_string());
                     }
                     row("drawn", s.visible.to_string());
                     row("culled: near", s.near.to_string());
