@@ -131,8 +131,7 @@ fn guava_refiner_refuses_another_avatars_channels_and_letterboxes_other_frames()
     // A default-mode avatar's frame (RGB and confidence) is refused with the file named.
     let message = refiner
         .refine(&SplatImage::new(40, 24, 4))
-        .err()
-        .expect("4 channels refused")
+        .expect_err("4 channels refused")
         .to_string();
     assert!(
         message.contains("guava_refiner.onnx") && message.contains(&format!("{channels} channels")),

@@ -36,8 +36,9 @@ pub struct Options {
     pub autoplay: bool,
     /// Start paused at this time of the motion (seconds), e.g. for scripted screenshots.
     pub motion_time: Option<f32>,
-    /// Destroy the GPU device this many seconds after launch (fault injection: what a driver
-    /// reset does; the window must not hang and the user's avatar must be saved).
+    /// Destroy the GPU device this many seconds after what was asked to open has opened (fault
+    /// injection: what a driver reset does; the window must not hang and the user's avatar must
+    /// be saved).
     pub lose_device_after: Option<f32>,
     /// With nothing else to open, start on the demo portrait's avatar (the window does; tests
     /// start on the bare body).
@@ -157,6 +158,8 @@ pub(crate) struct FrameClock {
     pub exiting: bool,
     pub last_frame: Option<Instant>,
     pub frame_ms: f32,
+    /// When what was asked to open at launch had opened.
+    pub opened: Option<Instant>,
 }
 
 impl GuavaApp {
@@ -224,6 +227,7 @@ impl GuavaApp {
                 exiting: false,
                 last_frame: None,
                 frame_ms: 0.0,
+                opened: None,
             },
         };
         if let Some(storage) = cc.storage {
@@ -386,13 +390,21 @@ impl GuavaApp {
             // The real-window test waits for this line before taking its own screenshot.
             println!("guava-viewer: ready");
         }
-        if let (Some(secs), Some(offscreen)) = (self.options.lose_device_after, &self.gpu.offscreen)
-            && self.clock.launched.elapsed().as_secs_f32() >= secs
-            && self.job.is_none()
-            && self.queue.is_empty()
+        // What was asked to open has opened (the first launch: the demo portrait's avatar).
+        if self.clock.opened.is_none() && self.job.is_none() && self.queue.is_empty() {
+            self.clock.opened = Some(Instant::now());
+            if let Some(a) = &self.avatar {
+                // The real-window test waits for this line to photograph the avatar.
+                println!("guava-viewer: showing {}", a.avatar.source);
+            }
+        }
+        if let (Some(secs), Some(offscreen), Some(opened)) = (
+            self.options.lose_device_after,
+            &self.gpu.offscreen,
+            self.clock.opened,
+        ) && opened.elapsed().as_secs_f32() >= secs
         {
-            // Fault injection: the device destroyed as a driver reset would (once what was
-            // asked to open has opened).
+            // Fault injection: the device destroyed as a driver reset would.
             let mut offscreen = offscreen.lock().unwrap_or_else(|e| e.into_inner());
             offscreen.renderer().gpu.device.destroy();
             self.options.lose_device_after = None;

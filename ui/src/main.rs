@@ -24,8 +24,8 @@ struct Args {
     /// Start with the motion paused at this time (seconds) instead of playing.
     #[arg(long)]
     motion_time: Option<f32>,
-    /// Fault injection: destroy the GPU device this many seconds after launch, as a driver
-    /// reset would (the viewer saves your avatar and exits with a message).
+    /// Fault injection: destroy the GPU device this many seconds after what was asked to open
+    /// has opened, as a driver reset would (the viewer saves your avatar and exits with a message).
     #[arg(long, hide = true)]
     lose_device_after: Option<f32>,
 }

@@ -129,40 +129,60 @@ fn the_viewer_window_shows_the_scene_and_exits_cleanly() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// A GPU device lost mid-session (destroyed by the viewer's fault injection, as a driver reset
-/// would): no hang and no bare backtrace; the viewer says so, writes the avatar on screen to its
-/// recovery file and exits with status 3.
+/// The first launch, as a new user sees it: the demo portrait's avatar in the viewport (orange
+/// suit, skin) once it is made. Then a GPU device lost mid-session (destroyed by the viewer's
+/// fault injection, as a driver reset would): no hang and no bare backtrace; the viewer says so,
+/// writes the avatar on screen to its recovery file and exits with status 3.
 #[test]
-fn a_lost_device_saves_the_avatar_and_exits_with_a_message() {
-    use guava::pipeline::{Mode, Photo, Pipeline, Tracked};
+fn the_first_launch_shows_the_avatar_and_a_lost_device_saves_it() {
     let xvfb = Xvfb::start();
-    let dir = std::env::temp_dir().join(format!("guava-window-lost-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("guava-window-first-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let photo = root.join("assets/demo_portrait.png");
-    let body = guava::body::BodyModel::default_body().expect("default body");
-    let outcome = Pipeline::default()
-        .reconstruct(
-            Mode::Default(&body),
-            Photo::File(&photo),
-            Tracked::beside(&photo),
-            &mut |_| true,
-        )
-        .expect("demo portrait");
-    let avatar = dir.join("demo.guava");
-    outcome.avatar.save(&avatar).expect("avatar");
-
     let mut viewer = Command::new(env!("CARGO_BIN_EXE_guava-viewer"))
-        .arg(&avatar)
-        .args(["--lose-device-after", "3"])
+        .args(["--lose-device-after", "6"])
         .env("DISPLAY", &xvfb.display)
         .env("XDG_RUNTIME_DIR", runtime_dir())
         .env("XDG_DATA_HOME", &dir)
         .env_remove("WAYLAND_DISPLAY")
-        .stdout(Stdio::null())
+        .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("guava-viewer starts");
+    let stdout = BufReader::new(viewer.stdout.take().expect("stdout"));
+    let showing = stdout
+        .lines()
+        .map_while(Result::ok)
+        .find(|l| l.starts_with("guava-viewer: showing"));
+    assert_eq!(
+        showing.as_deref(),
+        Some("guava-viewer: showing demo_portrait.png"),
+        "the first launch opens the demo portrait's avatar"
+    );
+    std::thread::sleep(Duration::from_secs(2));
+    let shot = dir.join("first_launch.png");
+    let status = Command::new("import")
+        .args(["-display", &xvfb.display, "-window", "root"])
+        .arg(&shot)
+        .status()
+        .expect("ImageMagick `import`");
+    assert!(status.success(), "import failed");
+    let img = image::open(&shot).expect("screenshot").to_rgb8();
+    let (w, h) = img.dimensions();
+    let (mut suit, mut total) = (0u64, 0u64);
+    for y in 100..h - 120 {
+        for x in 560..w - 40 {
+            let [r, g, b] = img.get_pixel(x, y).0;
+            total += 1;
+            suit += u64::from(r > 170 && (50..170).contains(&g) && b < 110);
+        }
+    }
+    let share = suit as f64 / total as f64;
+    println!("first launch: {share:.3} of the viewport is the suit's orange");
+    assert!(
+        share > 0.05,
+        "the avatar is not in the viewport ({share:.3})"
+    );
+
     let start = Instant::now();
     let exit = loop {
         if let Some(status) = viewer.try_wait().expect("wait") {
@@ -184,7 +204,8 @@ fn a_lost_device_saves_the_avatar_and_exits_with_a_message() {
         "{stderr}"
     );
     let saved = guava::avatar::Avatar::load(&recovered).expect("the recovered avatar loads");
-    assert_eq!(saved.uv.local.len(), outcome.avatar.uv.local.len());
+    assert_eq!(saved.source, "demo_portrait.png");
+    assert!(saved.uv.local.len() > 100_000);
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -95,20 +95,23 @@ pub enum CameraPath {
     Tracked,
 }
 
-/// The body an avatar is posed on.
+/// The body an avatar is posed on (behind pointers: the two differ several-fold in size).
 enum Body {
-    Default(BodyModel),
+    Default(Box<BodyModel>),
     Ehm(Box<EhmModel>),
 }
 
 /// What is rendered: a splat file as it is, or an avatar posed per frame.
 enum Subject {
     Splats(GaussianCloud),
-    Avatar {
-        avatar: Box<Avatar>,
-        body: Body,
-        posing: Posing,
-    },
+    Avatar(Box<Posed>),
+}
+
+/// An avatar, its body and how it is posed.
+struct Posed {
+    avatar: Avatar,
+    body: Body,
+    posing: Posing,
 }
 
 /// How an avatar is posed.
@@ -135,11 +138,11 @@ impl Subject {
                         avatar.apply_ehm_identity(&mut body);
                         Body::Ehm(Box::new(body))
                     }
-                    None => Body::Default(BodyModel::default_body()?),
+                    None => Body::Default(Box::new(BodyModel::default_body()?)),
                 };
                 let with_path = |e: String| anyhow::anyhow!("{}: {e}", path.display());
                 match &body {
-                    Body::Default(b) => avatar.check_body(b),
+                    Body::Default(b) => avatar.check_body(b.as_ref()),
                     Body::Ehm(b) => avatar.check_body(b.as_ref()),
                 }
                 .map_err(with_path)?;
@@ -147,7 +150,7 @@ impl Subject {
                     (Some(m), _) => {
                         let t = guava::tracking::import::open_motion(m)?.tracking;
                         let retarget = match &body {
-                            Body::Default(b) => Retarget::new(&t, b),
+                            Body::Default(b) => Retarget::new(&t, b.as_ref()),
                             Body::Ehm(b) => Retarget::new(&t, b.as_ref()),
                         };
                         Posing::Motion(Box::new(t), retarget)
@@ -158,11 +161,11 @@ impl Subject {
                     (None, true) => Posing::Source,
                     (None, false) => Posing::Rest,
                 };
-                let subject = Subject::Avatar {
-                    avatar: Box::new(avatar),
+                let subject = Subject::Avatar(Box::new(Posed {
+                    avatar,
                     body,
                     posing,
-                };
+                }));
                 Ok((subject, path.display().to_string()))
             }
             (None, None) => anyhow::bail!("give --ply or --avatar"),
@@ -172,11 +175,11 @@ impl Subject {
     /// The motion's length (seconds) and frame rate, if a motion drives the subject.
     fn motion(&self) -> Option<(f64, f32)> {
         match self {
-            Subject::Avatar {
-                posing: Posing::Motion(t, _),
-                ..
-            } => Some((t.duration(), t.fps)),
-            _ => None,
+            Subject::Avatar(posed) => match &posed.posing {
+                Posing::Motion(t, _) => Some((t.duration(), t.fps)),
+                _ => None,
+            },
+            Subject::Splats(_) => None,
         }
     }
 
@@ -185,16 +188,10 @@ impl Subject {
     fn at(&self, time: f64, rig: &mut Rig) -> Result<(Cow<'_, GaussianCloud>, Option<Camera>)> {
         let posed = match self {
             Subject::Splats(cloud) => return Ok((Cow::Borrowed(cloud), None)),
-            Subject::Avatar {
-                avatar,
-                body: Body::Default(b),
-                posing,
-            } => posed_avatar(avatar, b, posing, time, rig),
-            Subject::Avatar {
-                avatar,
-                body: Body::Ehm(b),
-                posing,
-            } => posed_avatar(avatar, b.as_ref(), posing, time, rig),
+            Subject::Avatar(p) => match &p.body {
+                Body::Default(b) => posed_avatar(&p.avatar, b.as_ref(), &p.posing, time, rig),
+                Body::Ehm(b) => posed_avatar(&p.avatar, b.as_ref(), &p.posing, time, rig),
+            },
         };
         posed.map(|(cloud, camera)| (Cow::Owned(cloud), camera))
     }
@@ -232,7 +229,8 @@ fn posed_avatar(
 pub fn run(args: RenderArgs) -> Result<()> {
     let (subject, name) = Subject::load(&args)?;
     let refiner = match (&subject, args.refine) {
-        (Subject::Avatar { avatar, .. }, true) => {
+        (Subject::Avatar(posed), true) => {
+            let avatar = &posed.avatar;
             let path = guava::refine::refiner_for(avatar.kind, args.guava_models.as_deref())
                 .map_err(|e| anyhow::anyhow!("{name}: {e} (--guava-models)"))?;
             Some(Refiner::load(guava::onnx::OnnxRuntime::load()?, &path)?)
@@ -308,7 +306,7 @@ impl Frames<'_> {
             ),
             _ => {
                 let framed = self.framed_on.get_or_insert_with(|| cloud.as_ref().clone());
-                let is_avatar = matches!(self.subject, Subject::Avatar { .. });
+                let is_avatar = matches!(self.subject, Subject::Avatar(_));
                 // Avatars stand on a y-up body; splat files use GUAVA's y-down axes.
                 let view = guava::camera::orbit_view(
                     framed,
