@@ -136,6 +136,8 @@ pub struct GuavaApp {
     pub(crate) recent: Vec<PathBuf>,
     /// Whether the help window (shortcuts, mouse) is open.
     pub(crate) help: bool,
+    /// Whether the avatar's photo is shown beside it in the viewport.
+    pub(crate) display_photo_beside: bool,
     /// The last `guava report`'s plot, read when its section is first opened.
     pub(crate) report_plot: Option<crate::report_plot::ReportPlot>,
     pub(crate) background: [f32; 3],
@@ -209,6 +211,7 @@ impl GuavaApp {
             export: Default::default(),
             recent: Vec::new(),
             help: false,
+            display_photo_beside: false,
             report_plot: None,
             background: [0.0; 3],
             // A software adapter cannot splat the full viewport at interactive rates.
@@ -354,6 +357,11 @@ impl GuavaApp {
     /// `None` shows the refined frame whole.
     pub fn set_compare(&mut self, split: Option<f32>) {
         self.refined.split = split.map(|s| s.clamp(0.0, 1.0));
+    }
+
+    /// Shows the avatar's photo beside it in the viewport (where it was made here).
+    pub fn set_photo_beside(&mut self, beside: bool) {
+        self.display_photo_beside = beside;
     }
 
     /// Whether the viewport's last frame showed the refined image (else the raw splat).

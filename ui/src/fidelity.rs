@@ -80,6 +80,26 @@ pub struct Fidelity {
 }
 
 impl Fidelity {
+    /// The photo (masked, at the size it was compared at) as a texture, and the part of the
+    /// texture it fills.
+    pub fn photo(&mut self, ctx: &egui::Context) -> (egui::TextureId, egui::Rect) {
+        let texture = self.texture(ctx);
+        let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0 / 3.0, 1.0));
+        (texture, uv)
+    }
+
+    fn texture(&mut self, ctx: &egui::Context) -> egui::TextureId {
+        self.texture
+            .get_or_insert_with(|| {
+                ctx.load_texture(
+                    "photo | avatar | difference",
+                    self.strip.clone(),
+                    Default::default(),
+                )
+            })
+            .id()
+    }
+
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
             for (shown, name, hover) in Shown::ALL {
@@ -87,20 +107,14 @@ impl Fidelity {
                     .on_hover_text(hover);
             }
         });
-        let texture = self.texture.get_or_insert_with(|| {
-            ui.ctx().load_texture(
-                "photo | avatar | difference",
-                self.strip.clone(),
-                Default::default(),
-            )
-        });
+        let texture = self.texture(ui.ctx());
         let side = ui.available_width().min(320.0);
         let third = self.shown.third();
         let uv = egui::Rect::from_min_max(
             egui::pos2(third / 3.0, 0.0),
             egui::pos2((third + 1.0) / 3.0, 1.0),
         );
-        ui.add(egui::Image::new((texture.id(), egui::vec2(side, side))).uv(uv));
+        ui.add(egui::Image::new((texture, egui::vec2(side, side))).uv(uv));
         let m = self.metrics;
         ui.label(format!(
             "silhouette IoU {:.3} · PSNR {:.2} dB · SSIM {:.3} · L1 {:.4} (over the person's box)",

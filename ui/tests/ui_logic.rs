@@ -1027,3 +1027,20 @@ fn settings_and_recent_files_are_remembered() {
         (640, 360, 12.0)
     );
 }
+
+/// The photo beside the avatar: the photo takes the viewport's left half and the avatar is
+/// drawn in the right half (half as wide).
+#[test]
+fn the_photo_beside_the_avatar_halves_the_view() {
+    let mut h = synthetic_avatar();
+    for _ in 0..3 {
+        frame(&mut h);
+    }
+    let [full, _] = h.state().report().rendered_size;
+    h.state_mut().set_photo_beside(true);
+    for _ in 0..3 {
+        frame(&mut h);
+    }
+    let [beside, _] = h.state().report().rendered_size;
+    assert!(beside.abs_diff(full / 2) <= 2, "{full} → {beside}");
+}

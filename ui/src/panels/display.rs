@@ -54,6 +54,14 @@ impl GuavaApp {
                  subjects, for default reconstructions; GUAVA's, from its networks folder, for \
                  GUAVA-mode avatars); the raw splat image is shown meanwhile",
             );
+        ui.checkbox(
+            &mut self.display_photo_beside,
+            "the photo beside the avatar",
+        )
+        .on_hover_text(
+            "the photo the avatar was made from, left of it; with the camera on the source \
+                 photo the two should match (Camera > source photo)",
+        );
         let mut compare = self.refined.split.is_some();
         ui.horizontal(|ui| {
             ui.add_enabled(

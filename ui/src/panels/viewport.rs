@@ -16,8 +16,27 @@ const SETTLE: Duration = Duration::from_millis(150);
 
 impl GuavaApp {
     pub(crate) fn viewport_ui(&mut self, ui: &mut egui::Ui) {
-        let rect = ui.available_rect_before_wrap();
+        let mut rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+        // The photo beside the avatar: the left half shows it, the avatar draws in the right.
+        let photo = match (&mut self.avatar, self.view) {
+            (Some(a), View::Avatar) if self.display_photo_beside => match &mut a.fidelity {
+                Some(Ok(f)) => Some(f.photo(ui.ctx())),
+                _ => None,
+            },
+            _ => None,
+        };
+        if let Some((texture, uv)) = photo {
+            let (left, right) = rect.split_left_right_at_fraction(0.5);
+            let [r, g, b] = self.background.map(|c| (c.clamp(0.0, 1.0) * 255.0) as u8);
+            ui.painter()
+                .rect_filled(left, 0.0, egui::Color32::from_rgb(r, g, b));
+            let side = left.width().min(left.height());
+            let square = egui::Rect::from_center_size(left.center(), egui::vec2(side, side));
+            ui.painter()
+                .image(texture, square, uv, egui::Color32::WHITE);
+            rect = right;
+        }
         let showing = match self.view {
             View::Gaussians => self.scene.is_some(),
             View::Body => self.body.is_some(),
@@ -144,6 +163,7 @@ impl GuavaApp {
     fn demo_hint(&self, ui: &egui::Ui, rect: egui::Rect) {
         let demo = demo_portrait();
         let showing_demo = self.view == View::Avatar
+            && !self.display_photo_beside
             && self.avatar.as_ref().is_some_and(|a| {
                 demo.file_name()
                     .and_then(|n| n.to_str())
