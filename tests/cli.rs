@@ -684,6 +684,19 @@ fn report_quick_writes_every_file_with_finite_numbers() {
         rows.iter().any(|r| r.last() == Some(&"yes")),
         "a Pareto front"
     );
+    // The demo portrait at the default UV side and one other, from its own camera.
+    let photos = read("photos.csv");
+    let rows: Vec<&str> = photos.lines().skip(1).collect();
+    assert_eq!(rows.len(), 2, "{photos}");
+    for row in rows {
+        let psnr: f64 = row
+            .split(',')
+            .nth(5)
+            .and_then(|v| v.parse().ok())
+            .expect("psnr");
+        assert!(psnr.is_finite() && psnr > 15.0, "{row}");
+    }
+    assert!(md.contains("## The real photos per UV side"));
     let stability = read("stability.csv");
     assert!(stability.lines().count() > 10);
     assert!(

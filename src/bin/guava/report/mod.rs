@@ -1,9 +1,11 @@
 //! `guava report`: what this machine's avatars cost and how wrong they are, in one folder —
 //! error against run time over the quality knobs with the Pareto front ([`tradeoffs`]), how the
 //! pipeline holds up on stiff and extreme inputs ([`stability`]), and what leaving work out saves
-//! ([`savings`]): `report.md` with the machine and adapter, CSV per section and an SVG plot.
+//! ([`savings`]), and the real photos per UV side ([`photos`]): `report.md` with the machine and
+//! adapter, CSV per section and an SVG plot.
 //! `--quick` runs a few small settings (the test suite runs it on lavapipe).
 
+mod photos;
 mod plot;
 mod savings;
 mod stability;
@@ -97,6 +99,9 @@ pub fn report(args: &ReportArgs) -> Result<()> {
 
     eprintln!("report: error against run time");
     let trade = tradeoffs::run(&mut renderer, &subject, &candidates, args.quick)?;
+    eprintln!("report: the real photos");
+    let sides: Vec<u32> = candidates.iter().map(|c| c.uv).collect();
+    let real = photos::run(&mut renderer, &mut pipeline, &body, &sides, args.quick)?;
     eprintln!("report: stability");
     let stable = stability::run(&mut renderer, &mut pipeline, &body, avatar)?;
     eprintln!("report: leaving work out");
@@ -110,6 +115,7 @@ pub fn report(args: &ReportArgs) -> Result<()> {
     write("tradeoffs.csv", &trade.table.csv())?;
     write("stability.csv", &stable.table.csv())?;
     write("savings.csv", &saved.csv())?;
+    write("photos.csv", &real.csv())?;
     write("tradeoffs.svg", &plot::svg(&trade.points))?;
 
     let mut md = String::new();
@@ -128,6 +134,13 @@ pub fn report(args: &ReportArgs) -> Result<()> {
     );
     let _ = writeln!(md, "{}", trade.table.markdown());
     let _ = writeln!(md, "{}\n", trade.note);
+    let _ = writeln!(
+        md,
+        "## The real photos per UV side\n\nEach photo fitted once, reconstructed at each side \
+         (timed, photo → avatar with the fit given) and compared with itself from its own camera \
+         over the person's box (`guava eval`); the mask is the pose model's.\n\n{}",
+        real.markdown()
+    );
     let _ = writeln!(md, "## Stability\n\n{}", stable.table.markdown());
     let _ = writeln!(md, "{}\n", stable.note);
     let _ = writeln!(
