@@ -119,9 +119,12 @@ impl Group {
         self
     }
 
-    /// Sets the preset's values (and overrides the motion).
-    pub fn choose(&mut self, preset: usize) {
-        let preset = &self.presets[preset];
+    /// Sets the named preset's values (and overrides the motion); `false` if the group has no
+    /// such preset.
+    pub fn choose(&mut self, name: &str) -> bool {
+        let Some(preset) = self.presets.iter().find(|p| p.name == name) else {
+            return false;
+        };
         for c in &mut self.controls {
             c.value = preset
                 .values
@@ -130,6 +133,7 @@ impl Group {
                 .map_or(0.0, |(_, v)| *v);
         }
         self.overridden = true;
+        true
     }
 
     /// Back to following the motion, the sliders at 0.
@@ -216,13 +220,13 @@ impl PoseControls {
 fn group_ui(group: &mut Group, ui: &mut egui::Ui) {
     ui.horizontal_wrapped(|ui| {
         let mut chosen = None;
-        for (i, p) in group.presets.iter().enumerate() {
+        for p in &group.presets {
             if ui.button(p.name).clicked() {
-                chosen = Some(i);
+                chosen = Some(p.name);
             }
         }
-        if let Some(i) = chosen {
-            group.choose(i);
+        if let Some(name) = chosen {
+            group.choose(name);
         }
         if ui
             .add_enabled(group.overridden, egui::Button::new("Reset"))

@@ -756,6 +756,12 @@ fn controls<'a>(
     &mut h.state_mut().body_mut().expect("body").controls
 }
 
+/// Sets a group's preset, as its button does.
+fn choose(h: &mut Harness<'static, GuavaApp>, group: &str, preset: &str) {
+    let group = controls(h).group_mut(group).expect("group");
+    assert!(group.choose(preset), "{preset}");
+}
+
 /// Where a joint of the shown body is, posed.
 fn joint_at(h: &mut Harness<'static, GuavaApp>, name: &str) -> glam::Vec3 {
     use guava::body::Posable;
@@ -787,39 +793,17 @@ fn grouped_controls_pose_in_peoples_terms_override_the_motion_until_reset() {
         joint_at(h, finger).distance(joint_at(h, "wrist.R"))
     };
     let (index_open, thumb_open) = (reach(&mut h, "finger2-3.R"), reach(&mut h, "finger1-3.R"));
-    let hand = controls(&mut h)
-        .group_mut("Right hand")
-        .expect("right hand");
-    let fist = hand
-        .presets
-        .iter()
-        .position(|p| p.name == "Fist")
-        .expect("preset");
-    hand.choose(fist);
+    choose(&mut h, "Right hand", "Fist");
     let (index_fist, thumb_fist) = (reach(&mut h, "finger2-3.R"), reach(&mut h, "finger1-3.R"));
     assert!(
         index_fist < 0.7 * index_open,
         "fist: index tip {index_fist:.3} m from the wrist, open {index_open:.3}"
     );
-    let hand = controls(&mut h)
-        .group_mut("Right hand")
-        .expect("right hand");
-    let up = hand
-        .presets
-        .iter()
-        .position(|p| p.name == "Thumbs up")
-        .expect("preset");
-    hand.choose(up);
+    choose(&mut h, "Right hand", "Thumbs up");
     assert!(reach(&mut h, "finger1-3.R") > thumb_fist.max(0.9 * thumb_open));
 
     // Waving raises the right hand above the right shoulder; nodding lowers the eyes.
-    let body = controls(&mut h).group_mut("Body").expect("body");
-    let wave = body
-        .presets
-        .iter()
-        .position(|p| p.name == "Wave")
-        .expect("preset");
-    body.choose(wave);
+    choose(&mut h, "Body", "Wave");
     assert!(joint_at(&mut h, "wrist.R").y > joint_at(&mut h, "upperarm01.R").y);
     let eye = joint_at(&mut h, "eye.L");
     let body = controls(&mut h).group_mut("Body").expect("body");

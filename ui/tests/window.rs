@@ -53,6 +53,31 @@ fn runtime_dir() -> PathBuf {
     dir
 }
 
+/// Photographs the X screen (ImageMagick's `import`) into `path`.
+fn photograph_screen(display: &str, path: &Path) {
+    let status = Command::new("import")
+        .args(["-display", display, "-window", "root"])
+        .arg(path)
+        .status()
+        .expect("ImageMagick `import` (bash tools/setup.sh installs imagemagick)");
+    assert!(status.success(), "import failed");
+}
+
+/// Waits (at most 180 s) for the viewer to exit by itself; its status and stderr.
+fn wait_for_exit(viewer: &mut Child, what: &str) -> (std::process::ExitStatus, String) {
+    let start = Instant::now();
+    let exit = loop {
+        if let Some(status) = viewer.try_wait().expect("wait") {
+            break status;
+        }
+        assert!(start.elapsed() < Duration::from_secs(180), "{what}");
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut viewer.stderr.take().expect("stderr"), &mut stderr).ok();
+    (exit, stderr)
+}
+
 /// Fraction of pixels in a region that are far from black, and how many distinct colours it has.
 fn region_stats(img: &image::RgbImage, x0: u32, y0: u32, x1: u32, y1: u32) -> (f64, usize) {
     let mut lit = 0u64;
@@ -98,26 +123,8 @@ fn the_viewer_window_shows_the_scene_and_exits_cleanly() {
     // Give the splatting pass a few frames, then photograph the X screen itself (the viewer
     // stays up for 15 s from launch, whatever its frame rate).
     std::thread::sleep(Duration::from_secs(2));
-    let status = Command::new("import")
-        .args(["-display", &xvfb.display, "-window", "root"])
-        .arg(&x_shot)
-        .status()
-        .expect("ImageMagick `import` (bash tools/setup.sh installs imagemagick)");
-    assert!(status.success(), "import failed");
-
-    let start = Instant::now();
-    let exit = loop {
-        if let Some(status) = viewer.try_wait().expect("wait") {
-            break status;
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(180),
-            "the viewer did not exit by itself"
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    };
-    let mut stderr = String::new();
-    std::io::Read::read_to_string(&mut viewer.stderr.take().expect("stderr"), &mut stderr).ok();
+    photograph_screen(&xvfb.display, &x_shot);
+    let (exit, stderr) = wait_for_exit(&mut viewer, "the viewer did not exit by itself");
     assert!(
         exit.success(),
         "viewer exit status {exit}; stderr:\n{stderr}"
@@ -160,12 +167,7 @@ fn the_first_launch_shows_the_avatar_and_a_lost_device_saves_it() {
     );
     std::thread::sleep(Duration::from_secs(2));
     let shot = dir.join("first_launch.png");
-    let status = Command::new("import")
-        .args(["-display", &xvfb.display, "-window", "root"])
-        .arg(&shot)
-        .status()
-        .expect("ImageMagick `import`");
-    assert!(status.success(), "import failed");
+    photograph_screen(&xvfb.display, &shot);
     let img = image::open(&shot).expect("screenshot").to_rgb8();
     let (w, h) = img.dimensions();
     let (mut suit, mut total) = (0u64, 0u64);
@@ -183,19 +185,7 @@ fn the_first_launch_shows_the_avatar_and_a_lost_device_saves_it() {
         "the avatar is not in the viewport ({share:.3})"
     );
 
-    let start = Instant::now();
-    let exit = loop {
-        if let Some(status) = viewer.try_wait().expect("wait") {
-            break status;
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(180),
-            "the viewer hung after losing its device"
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    };
-    let mut stderr = String::new();
-    std::io::Read::read_to_string(&mut viewer.stderr.take().expect("stderr"), &mut stderr).ok();
+    let (exit, stderr) = wait_for_exit(&mut viewer, "the viewer hung after losing its device");
     assert_eq!(exit.code(), Some(3), "{stderr}");
     assert!(stderr.contains("the GPU device was lost"), "{stderr}");
     let recovered = dir.join("guava-rs/recovered.guava");
