@@ -14,8 +14,12 @@ struct Xvfb {
 
 impl Xvfb {
     fn start() -> Self {
-        // A display number unlikely to clash with a developer's own or a parallel test run.
-        let n = 90 + std::process::id() % 100;
+        // A display number unlikely to clash with a developer's own or a parallel test run, and
+        // one per test: the tests of this file run in parallel in one process (sharing a number,
+        // the first to finish took the other's screen away; CI caught it).
+        static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        let test = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let n = 100 + (std::process::id() % 100) * 4 + test;
         let display = format!(":{n}");
         let child = Command::new("Xvfb")
             .args([
