@@ -353,20 +353,9 @@ impl GuavaApp {
         self.refined.frames
     }
 
-    /// Compare mode: the raw splat left of `split` (a share of the width), refined right of it;
-    /// `None` shows the refined frame whole.
-    pub fn set_compare(&mut self, split: Option<f32>) {
-        self.refined.split = split.map(|s| s.clamp(0.0, 1.0));
-    }
-
     /// Shows the avatar's photo beside it in the viewport (where it was made here).
     pub fn set_photo_beside(&mut self, beside: bool) {
         self.display_photo_beside = beside;
-    }
-
-    /// Whether the viewport's last frame showed the refined image (else the raw splat).
-    pub fn showing_refined(&self) -> bool {
-        self.refined.showing
     }
 
     pub fn report(&self) -> ViewReport {

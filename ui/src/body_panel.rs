@@ -104,8 +104,12 @@ impl BodyState {
     }
 
     fn update(&mut self) {
-        let pose = self.effective_pose();
-        if self.posed_for.as_ref() == Some(&pose) {
+        // The motion's pose as it is unless a group overrides part of it (no copy per frame).
+        let pose = match self.controls.overridden().next() {
+            Some(_) => std::borrow::Cow::Owned(self.effective_pose()),
+            None => std::borrow::Cow::Borrowed(&self.pose),
+        };
+        if self.posed_for.as_ref() == Some(&*pose) {
             return;
         }
         // In place unless the viewport still holds the last pose.
@@ -116,7 +120,7 @@ impl BodyState {
         }
         self.pose_ms = started.elapsed().as_secs_f32() * 1e3;
         self.mesh = None;
-        self.posed_for = Some(pose);
+        self.posed_for = Some(pose.into_owned());
         self.pose_id = next_id();
     }
 

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
-use guava::body::{BodyPose, Posable, PosedBody, vertex_normals};
+use guava::body::{BodyPose, Posable, PosedBody};
 use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
 use guava::onnx::OnnxRuntime;
@@ -279,22 +279,14 @@ impl GuavaApp {
         let Some(body) = &mut self.body else {
             return Err("no body to export".into());
         };
-        let posed = body.posed();
-        let (triangles, weld) = (body.triangles(), body.weld());
-        let mut normals = Vec::new();
-        vertex_normals(
-            &posed.posed.vertices,
-            &triangles,
-            weld.as_deref().map(Vec::as_slice),
-            &mut Vec::new(),
-            &mut normals,
-        );
-        guava::body::mesh_export::write_glb(out, &posed.posed.vertices, &normals, &triangles)
+        // The mesh view's posed positions and normals (made once per pose, shared).
+        let mesh = body.frame(self.background);
+        guava::body::mesh_export::write_glb(out, &mesh.positions, &mesh.normals, &mesh.triangles)
             .map_err(|e| format!("{}: {e}", out.display()))?;
         self.info(format!(
             "wrote {} ({} vertices)",
             out.display(),
-            posed.posed.vertices.len()
+            mesh.positions.len()
         ));
         Ok(())
     }

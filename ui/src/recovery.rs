@@ -29,7 +29,7 @@ pub fn watch(device: &wgpu::Device) {
 }
 
 /// Why the device was lost, if it was.
-pub fn lost() -> Option<String> {
+fn lost() -> Option<String> {
     LOST.lock().unwrap_or_else(|e| e.into_inner()).clone()
 }
 

@@ -44,6 +44,20 @@ impl Xvfb {
     }
 }
 
+impl Xvfb {
+    /// The viewer on this display (stdout and stderr piped), ready for its arguments.
+    fn viewer(&self) -> Command {
+        let mut viewer = Command::new(env!("CARGO_BIN_EXE_guava-viewer"));
+        viewer
+            .env("DISPLAY", &self.display)
+            .env("XDG_RUNTIME_DIR", runtime_dir())
+            .env_remove("WAYLAND_DISPLAY")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
+        viewer
+    }
+}
+
 impl Drop for Xvfb {
     fn drop(&mut self) {
         let _ = self.child.kill();
@@ -105,14 +119,10 @@ fn the_viewer_window_shows_the_scene_and_exits_cleanly() {
     std::fs::create_dir_all(&dir).expect("temp dir");
     let self_shot = dir.join("frame.png");
     let x_shot = dir.join("screen.png");
-    let mut viewer = Command::new(env!("CARGO_BIN_EXE_guava-viewer"))
+    let mut viewer = xvfb
+        .viewer()
         .args(["--test-scene", "--exit-after-secs", "15", "--screenshot"])
         .arg(&self_shot)
-        .env("DISPLAY", &xvfb.display)
-        .env("XDG_RUNTIME_DIR", runtime_dir())
-        .env_remove("WAYLAND_DISPLAY")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
         .spawn()
         .expect("guava-viewer starts");
     let stdout = BufReader::new(viewer.stdout.take().expect("stdout"));
@@ -149,14 +159,10 @@ fn the_first_launch_shows_the_avatar_and_a_lost_device_saves_it() {
     let xvfb = Xvfb::start();
     let dir = std::env::temp_dir().join(format!("guava-window-first-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let mut viewer = Command::new(env!("CARGO_BIN_EXE_guava-viewer"))
+    let mut viewer = xvfb
+        .viewer()
         .args(["--lose-device-after", "6"])
-        .env("DISPLAY", &xvfb.display)
-        .env("XDG_RUNTIME_DIR", runtime_dir())
         .env("XDG_DATA_HOME", &dir)
-        .env_remove("WAYLAND_DISPLAY")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
         .spawn()
         .expect("guava-viewer starts");
     let stdout = BufReader::new(viewer.stdout.take().expect("stdout"));
