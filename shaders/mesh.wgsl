@@ -1,5 +1,6 @@
 // Mesh view of a posed body: headlight-shaded triangles, an optional wireframe of the triangle
-// edges drawn over them, and the blit that puts the offscreen image into the viewer's pass.
+// edges drawn over them, and the blit that puts the offscreen image into the viewer's pass
+// (blended: an overlay's empty pixels are transparent).
 
 struct MeshUniforms {
     clip_from_world: mat4x4<f32>,
@@ -38,7 +39,7 @@ fn fs_shaded(in: MeshOut) -> @location(0) vec4<f32> {
     let len = length(n);
     n = select(to_eye, n / len, len > 1e-12);
     let lambert = abs(dot(n, to_eye));
-    return vec4<f32>(mesh.surface.rgb * (0.25 + 0.75 * lambert), 1.0);
+    return vec4<f32>(mesh.surface.rgb * (0.25 + 0.75 * lambert), mesh.surface.a);
 }
 
 @fragment
@@ -64,9 +65,10 @@ fn vs_blit(@builtin(vertex_index) v: u32) -> FullscreenOut {
 @fragment
 fn fs_blit(in: FullscreenOut) -> @location(0) vec4<f32> {
     let p = fullscreen_texel(in.uv, blit.size);
-    var c = textureLoad(image, p, 0).rgb;
+    let texel = textureLoad(image, p, 0);
+    var c = texel.rgb;
     if blit.srgb_target != 0u {
         c = srgb_to_linear(c);
     }
-    return vec4<f32>(c, 1.0);
+    return vec4<f32>(c, texel.a);
 }

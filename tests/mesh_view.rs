@@ -79,6 +79,7 @@ fn shaded() -> MeshStyle {
         shaded: true,
         wireframe: false,
         background: BACKGROUND,
+        overlay: None,
     }
 }
 
@@ -165,6 +166,7 @@ fn the_image_follows_the_pose_and_the_wireframe_switch() {
         shaded: false,
         wireframe: true,
         background: BACKGROUND,
+        overlay: None,
     };
     let (lines, _) = view.render(&BodyPose::rest(&view.model), wire);
     let count = |m: &[bool]| m.iter().filter(|v| **v).count();

@@ -47,6 +47,9 @@ pub struct MeshStyle {
     pub shaded: bool,
     pub wireframe: bool,
     pub background: [f32; 3],
+    /// Drawn over what the viewer drew below (the avatar) at this opacity, instead of on the
+    /// background: the mesh's own depth test still hides its far side.
+    pub overlay: Option<f32>,
 }
 
 /// OpenGL-style clip matrix for [`Camera`]'s pixel-edge intrinsics and x-right, y-down, z-forward
@@ -232,7 +235,12 @@ impl MeshPass {
                     module: &module,
                     entry_point: Some("fs_blit"),
                     compilation_options: Default::default(),
-                    targets: &[Some(format.into())],
+                    // Opaque for the mesh view (alpha 1), blended for an overlay.
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format,
+                        blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
                 }),
                 primitive: wgpu::PrimitiveState::default(),
                 depth_stencil: None,
@@ -374,14 +382,15 @@ impl MeshPass {
     ) {
         let size = [camera.width.max(1), camera.height.max(1)];
         self.ensure_targets(device, size);
+        let opacity = style.overlay.unwrap_or(1.0).clamp(0.0, 1.0);
         let uniforms = MeshUniforms {
             clip_from_world: (clip_from_view(camera) * camera.view_from_world).to_cols_array_2d(),
             view_from_world: camera.view_from_world.to_cols_array_2d(),
-            surface: [0.78, 0.72, 0.66, 1.0],
+            surface: [0.78, 0.72, 0.66, opacity],
             wire: if style.shaded {
-                [0.12, 0.16, 0.22, 1.0]
+                [0.12, 0.16, 0.22, opacity]
             } else {
-                [0.85, 0.88, 0.92, 1.0]
+                [0.85, 0.88, 0.92, opacity]
             },
         };
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
@@ -396,6 +405,8 @@ impl MeshPass {
         let Some(targets) = &self.targets else { return };
         let color_view = targets.color.create_view(&Default::default());
         let [r, g, b] = style.background.map(f64::from);
+        // An overlay's empty pixels are transparent: the blit leaves the image below there.
+        let a = if style.overlay.is_some() { 0.0 } else { 1.0 };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("Mesh"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -403,7 +414,7 @@ impl MeshPass {
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 }),
+                    load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a }),
                     store: wgpu::StoreOp::Store,
                 },
             })],

@@ -30,7 +30,13 @@ pub struct Frame {
     /// Draw an avatar's coarse stand-in ([`Avatar::preview`]) instead of all its Gaussians, as
     /// a UI does while the user drags or plays.
     pub preview: bool,
+    /// Which pane of the view this is (below [`PANES`]): the sides of a split present the same
+    /// splats each its own way (its [`Look`]'s display), each pane drawn by its own callback.
+    pub pane: usize,
 }
+
+/// Panes a view presents at once (a split's two sides).
+pub const PANES: usize = 2;
 
 #[derive(Clone)]
 pub enum Content {
@@ -170,11 +176,19 @@ struct ShownAvatar {
     preview: Option<GpuAvatar>,
 }
 
-/// The stats buffer's way back: copied into staging with a render, mapped a frame later.
+/// The stats buffer's way back: copied into staging with a render, mapped a frame later —
+/// when the pane that copied it prepares again (each pane prepares once per UI frame, and what
+/// one frame recorded is submitted before the next).
 enum StatsReadback {
     Idle,
-    Copied,
+    Copied { pane: usize },
     Mapping(Arc<AtomicBool>),
+}
+
+/// One pane's present settings and its binding of the splat output.
+struct Pane {
+    uniform: wgpu::Buffer,
+    bind: Option<wgpu::BindGroup>,
 }
 
 pub struct ViewRenderer {
@@ -187,8 +201,7 @@ pub struct ViewRenderer {
     rigged: Option<(Source, u64)>,
     last: Option<SplatKey>,
     present: PresentPass,
-    present_uniform: wgpu::Buffer,
-    present_bind: Option<wgpu::BindGroup>,
+    panes: [Pane; PANES],
     /// The splat counters (32 bytes), then the stage timestamps where the device has them.
     stats_staging: wgpu::Buffer,
     stats_state: StatsReadback,
@@ -220,13 +233,15 @@ impl ViewRenderer {
             rigged: None,
             last: None,
             present: PresentPass::new(device, target),
-            present_uniform: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("View::present_uniform"),
-                size: size_of::<PresentUniform>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
+            panes: std::array::from_fn(|_| Pane {
+                uniform: device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("View::present_uniform"),
+                    size: size_of::<PresentUniform>() as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }),
+                bind: None,
             }),
-            present_bind: None,
             stats_staging: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("View::stats_staging"),
                 size: STATS_BYTES + timer.as_ref().map_or(0, StageTimer::resolved_size),
@@ -365,7 +380,8 @@ impl ViewRenderer {
         look: &Look,
         report: &mut ViewReport,
     ) -> Option<wgpu::CommandBuffer> {
-        if let Some((stats, stage_ms)) = self.poll_stats(device) {
+        let pane = frame.pane.min(PANES - 1);
+        if let Some((stats, stage_ms)) = self.poll_stats(device, pane) {
             if self.splatter.grow_for(device, &stats) {
                 self.last = None;
                 report.needs_redraw = true;
@@ -413,12 +429,13 @@ impl ViewRenderer {
                     timer.resolve(&mut encoder);
                     timer.copy_resolved(&mut encoder, &self.stats_staging, STATS_BYTES);
                 }
-                self.stats_state = StatsReadback::Copied;
+                self.stats_state = StatsReadback::Copied { pane };
             }
             buffer = Some(encoder.finish());
-            self.present_bind = self
-                .present
-                .bind(device, &self.present_uniform, &self.splatter);
+            // Every pane presents the new output (the splatter may have reallocated it).
+            for p in &mut self.panes {
+                p.bind = self.present.bind(device, &p.uniform, &self.splatter);
+            }
             self.last = Some(key);
             report.renders += 1;
             report.rendered_size = [camera.width, camera.height];
@@ -432,7 +449,7 @@ impl ViewRenderer {
             d.rgb_channels,
             d.inv_depth_range,
         );
-        queue.write_buffer(&self.present_uniform, 0, bytemuck::bytes_of(&uniform));
+        queue.write_buffer(&self.panes[pane].uniform, 0, bytemuck::bytes_of(&uniform));
         buffer
     }
 
@@ -479,10 +496,16 @@ impl ViewRenderer {
 
     /// Advances the non-blocking stats readback; returns the counters (and the stage times,
     /// where timed) when a copy has landed.
-    fn poll_stats(&mut self, device: &wgpu::Device) -> Option<(RenderStats, Option<Vec<f64>>)> {
+    fn poll_stats(
+        &mut self,
+        device: &wgpu::Device,
+        pane: usize,
+    ) -> Option<(RenderStats, Option<Vec<f64>>)> {
         match &self.stats_state {
             StatsReadback::Idle => None,
-            StatsReadback::Copied => {
+            // Copied by another pane this UI frame: not submitted yet.
+            StatsReadback::Copied { pane: copied } if *copied != pane => None,
+            StatsReadback::Copied { .. } => {
                 // The copy was submitted last frame: now the buffer may be mapped.
                 let done = Arc::new(AtomicBool::new(false));
                 let flag = done.clone();
@@ -528,7 +551,7 @@ impl ViewRenderer {
     pub fn paint(&self, pass: &mut wgpu::RenderPass<'static>, frame: &Frame) {
         match &frame.content {
             Content::Cloud { .. } | Content::Avatar { .. } => {
-                if let Some(bind) = &self.present_bind {
+                if let Some(bind) = &self.panes[frame.pane.min(PANES - 1)].bind {
                     self.present.draw(pass, bind);
                 }
             }

@@ -136,6 +136,8 @@ pub struct GuavaApp {
     pub(crate) recent: Vec<PathBuf>,
     /// Whether the help window (shortcuts, mouse) is open.
     pub(crate) help: bool,
+    /// A split between two views, and the mesh over the avatar.
+    pub(crate) views: crate::compare::Views,
     /// Whether the avatar's photo is shown beside it in the viewport.
     pub(crate) display_photo_beside: bool,
     /// The last `guava report`'s plot, read when its section is first opened.
@@ -211,6 +213,7 @@ impl GuavaApp {
             export: Default::default(),
             recent: Vec::new(),
             help: false,
+            views: Default::default(),
             display_photo_beside: false,
             report_plot: None,
             background: [0.0; 3],
@@ -356,6 +359,16 @@ impl GuavaApp {
     /// Shows the avatar's photo beside it in the viewport (where it was made here).
     pub fn set_photo_beside(&mut self, beside: bool) {
         self.display_photo_beside = beside;
+    }
+
+    /// Two views side by side (`None`: one view, as the display panel sets it).
+    pub fn set_compare(&mut self, compare: Option<crate::compare::Compare>) {
+        self.views.compare = compare;
+    }
+
+    /// The body's mesh over the avatar at an opacity (`None`: off).
+    pub fn set_mesh_over(&mut self, opacity: Option<f32>) {
+        self.views.mesh_over = opacity;
     }
 
     pub fn report(&self) -> ViewReport {

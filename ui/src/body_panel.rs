@@ -161,6 +161,7 @@ impl BodyState {
                 shaded: self.shaded,
                 wireframe: self.wireframe,
                 background,
+                overlay: None,
             },
         }
     }

@@ -37,8 +37,6 @@ struct Refined {
 pub struct RefinedView {
     /// Whether the refiner runs when the view settles (the user's switch).
     pub enabled: bool,
-    /// Compare mode: the raw splat is shown left of this share of the width, refined right.
-    pub split: Option<f32>,
     refiner: Arc<Mutex<Option<Refiner>>>,
     pending: Option<(RefineKey, Receiver<Result<Refined, String>>)>,
     shown: Option<(RefineKey, egui::TextureHandle)>,
@@ -57,7 +55,6 @@ impl Default for RefinedView {
     fn default() -> Self {
         Self {
             enabled: true,
-            split: None,
             refiner: Arc::default(),
             pending: None,
             shown: None,

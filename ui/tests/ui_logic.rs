@@ -1028,3 +1028,114 @@ fn the_photo_beside_the_avatar_halves_the_view() {
     let [beside, _] = h.state().report().rendered_size;
     assert!(beside.abs_diff(full / 2) <= 2, "{full} → {beside}");
 }
+
+/// The window's pixels after `frames` frames.
+fn pixels(h: &mut Harness<'static, GuavaApp>, frames: usize) -> image::RgbaImage {
+    for _ in 0..frames {
+        frame(h);
+    }
+    h.render().expect("frame renders")
+}
+
+/// Pixels of `img` inside the viewport's columns `x` (window points = pixels here) and rows
+/// 100..600 that satisfy `keep`.
+fn count(img: &image::RgbaImage, x: std::ops::Range<u32>, keep: impl Fn([u8; 3]) -> bool) -> usize {
+    x.flat_map(|x| (100..600).map(move |y| (x, y)))
+        .filter(|&(x, y)| {
+            let [r, g, b, _] = img.get_pixel(x, y).0;
+            keep([r, g, b])
+        })
+        .count()
+}
+
+/// A split between any two views: alpha left (white where the avatar covers), the raw splat's
+/// colours right (the synthetic subject is saturated greens and magentas); both sides present
+/// one splat, so a camera change still splats once.
+#[test]
+fn a_split_shows_two_views_of_one_splat() {
+    use guava_ui::compare::{Compare, Shown};
+    let mut h = synthetic_avatar();
+    h.state_mut().set_compare(Some(Compare {
+        left: Shown::Alpha,
+        right: Shown::Raw,
+        at: 0.5,
+    }));
+    let img = pixels(&mut h, 5);
+    let grey = |[r, g, b]: [u8; 3]| r.abs_diff(g) <= 2 && g.abs_diff(b) <= 2;
+    let white = |p: [u8; 3]| grey(p) && p[0] > 240;
+    let coloured = |[r, g, b]: [u8; 3]| r.max(g).max(b) - r.min(g).min(b) > 60;
+    // The viewport spans x ≈ 350–1100 (the side panel is narrower than 400 points).
+    let (left, right) = (420..700, 760..1090);
+    assert!(count(&img, left.clone(), white) > 2000, "alpha on the left");
+    assert_eq!(count(&img, left.clone(), |p| !grey(p)), 0, "only grey left");
+    assert!(
+        count(&img, right.clone(), coloured) > 2000,
+        "colour on the right"
+    );
+    let renders = h.state().report().renders;
+    h.state_mut().set_yaw_deg(25.0);
+    pixels(&mut h, 3);
+    assert_eq!(
+        h.state().report().renders,
+        renders + 1,
+        "one splat, two panes"
+    );
+    // The split moves: all alpha.
+    h.state_mut().set_compare(Some(Compare {
+        left: Shown::Alpha,
+        right: Shown::Raw,
+        at: 1.0,
+    }));
+    let img = pixels(&mut h, 3);
+    assert_eq!(count(&img, right, coloured), 0, "the split moved right");
+}
+
+/// The photo in a split lines up with the avatar through the photo's camera: its person's
+/// pixels and the avatar's overlap as `guava eval`'s silhouette IoU says (0.97 for the
+/// synthetic photo; above 0.9 here, at the viewport's resolution).
+#[test]
+fn the_photo_in_a_split_lines_up_with_the_avatar() {
+    use guava_ui::compare::{Compare, Shown};
+    let mut h = synthetic_avatar();
+    h.state_mut().set_camera_mode(CameraMode::Source);
+    let split = |h: &mut Harness<'static, GuavaApp>, left| {
+        h.state_mut().set_compare(Some(Compare {
+            left,
+            right: Shown::Raw,
+            at: 1.0,
+        }));
+        pixels(h, 5)
+    };
+    let (photo, avatar) = (split(&mut h, Shown::Photo), split(&mut h, Shown::Alpha));
+    let person = |img: &image::RgbaImage, x, y| img.get_pixel(x, y).0[..3].iter().any(|c| *c > 40);
+    let (mut both, mut either) = (0, 0);
+    for x in 420..1090 {
+        for y in 100..600 {
+            let (p, a) = (person(&photo, x, y), person(&avatar, x, y));
+            both += (p && a) as usize;
+            either += (p || a) as usize;
+        }
+    }
+    let iou = both as f64 / either.max(1) as f64;
+    assert!(
+        either > 20_000 && iou > 0.9,
+        "IoU {iou:.3} over {either} pixels"
+    );
+}
+
+/// The mesh over the avatar: at full opacity the body's shaded beige covers the subject's
+/// saturated colours (1.5k beige pixels → 28k); off, they are back.
+#[test]
+fn the_mesh_is_drawn_over_the_avatar() {
+    let mut h = synthetic_avatar();
+    let beige = |[r, g, b]: [u8; 3]| r > 110 && r >= g && g >= b && r - b < 70;
+    let viewport = 420..1090;
+    let before = count(&pixels(&mut h, 5), viewport.clone(), beige);
+    h.state_mut().set_mesh_over(Some(1.0));
+    let over = count(&pixels(&mut h, 5), viewport.clone(), beige);
+    h.state_mut().set_mesh_over(None);
+    let after = count(&pixels(&mut h, 5), viewport, beige);
+    assert!(over > 10 * before.max(1000), "{before} → {over}");
+    // Off again (the refined frame may have replaced the raw one meanwhile: not equal).
+    assert!(after < 2 * before.max(1000), "{over} → {after}");
+}

@@ -6,7 +6,8 @@
 use guava::render::present::PresentMode;
 use guava::render::splatter::Stage;
 
-use crate::app::{GuavaApp, View};
+use crate::app::{CameraMode, GuavaApp, View};
+use crate::compare::Shown;
 
 /// Resolution scales offered while the user drags, orbits or plays.
 const INTERACTIVE_SCALES: [(f32, &str); 4] =
@@ -62,23 +63,16 @@ impl GuavaApp {
             "the photo the avatar was made from, left of it; with the camera on the source \
                  photo the two should match (Camera > source photo)",
         );
-        let mut compare = self.refined.split.is_some();
-        ui.horizontal(|ui| {
-            ui.add_enabled(
-                self.refined.enabled,
-                egui::Checkbox::new(&mut compare, "compare raw | refined"),
-            );
-            if compare {
-                let split = self.refined.split.get_or_insert(0.5);
-                ui.add(
-                    egui::Slider::new(split, 0.0..=1.0)
-                        .show_value(false)
-                        .text("split"),
-                );
-            } else {
-                self.refined.split = None;
-            }
-        });
+        let avatar = self.view == View::Avatar;
+        self.views.ui(ui, avatar);
+        let photo = self
+            .views
+            .compare
+            .is_some_and(|c| [c.left, c.right].contains(&Shown::Photo));
+        if avatar && photo && self.camera_mode == CameraMode::Orbit {
+            // The photo lines up with the avatar only through its own camera.
+            self.camera_mode = CameraMode::Source;
+        }
         if let Some(ms) = self.refined.last_ms {
             ui.label(format!(
                 "last refined frame: {ms:.0} ms (draw, read back, ONNX Runtime on the CPU)"

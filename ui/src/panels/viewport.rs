@@ -6,6 +6,7 @@ use std::time::Duration;
 use guava::render::view::{CloudRef, Content, Frame, Look};
 
 use crate::app::{CameraMode, GuavaApp, View};
+use crate::compare::Shown;
 use crate::files::demo_portrait;
 use crate::refined::RefineKey;
 use crate::viewport::ViewportCallback;
@@ -108,55 +109,159 @@ impl GuavaApp {
             ui.ctx().request_repaint_after(SETTLE);
         }
         let camera = self.view_camera(w, h);
-        let refined = match interacting {
-            true => None,
-            false => self.refined_frame(ui.ctx(), &content, camera),
+        let scale = match self.interaction.active {
+            true => self.interaction.scale,
+            false => 1.0,
         };
-        self.refined.showing = refined.is_some();
-        let frame = Frame {
+        let preview = self.interaction.active;
+        let frame = |content, pane| Frame {
             content,
             camera,
-            scale: if self.interaction.active {
-                self.interaction.scale
-            } else {
-                1.0
-            },
-            preview: self.interaction.active,
+            scale,
+            preview,
+            pane,
         };
+        if let Content::Mesh(_) = content {
+            self.refined.showing = false;
+            self.paint_frame(ui, rect, rect, frame(content, 0));
+            return;
+        }
+        // The panes: one view, or the two sides of a split.
+        let avatar = matches!(content, Content::Avatar { .. });
+        let usable = |s: Shown| {
+            if avatar || !s.needs_avatar() {
+                s
+            } else {
+                Shown::Raw
+            }
+        };
+        let panes = match self.views.compare {
+            Some(c) => {
+                let (left, right) = rect.split_left_right_at_x(egui::lerp(rect.x_range(), c.at));
+                vec![(left, usable(c.left)), (right, usable(c.right))]
+            }
+            None => vec![(
+                rect,
+                usable(Shown::of_display(&self.display, self.refined.enabled)),
+            )],
+        };
+        let refined = match panes.iter().any(|(_, s)| *s == Shown::Refined) && !interacting {
+            true => self.refined_frame(ui.ctx(), &content, camera),
+            false => None,
+        };
+        self.refined.showing = refined.is_some();
+        for (pane, &(clip, shown)) in panes.iter().enumerate() {
+            match shown.display(&self.display) {
+                Some(display) => {
+                    let mut content = content.clone();
+                    if let Content::Cloud { look, .. } | Content::Avatar { look, .. } = &mut content
+                    {
+                        look.display = display;
+                    }
+                    // The splatting view gets its frame even under the refined picture:
+                    // unchanged, it draws nothing new, and its counters keep reaching the HUD.
+                    self.paint_frame(ui, rect, clip, frame(content, pane));
+                    if let (Shown::Refined, Some(texture)) = (shown, refined) {
+                        let full =
+                            egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+                        ui.painter().with_clip_rect(clip).image(
+                            texture,
+                            rect,
+                            full,
+                            egui::Color32::WHITE,
+                        );
+                    }
+                }
+                None if shown == Shown::Mesh => {
+                    if let Some(body) = &mut self.body {
+                        let mesh = Content::Mesh(body.frame(self.background));
+                        self.paint_frame(ui, rect, clip, frame(mesh, pane));
+                    }
+                }
+                None => self.photo_pane(ui, rect, clip),
+            }
+        }
+        // The mesh over the avatar (not over a mesh pane: the view has one mesh image).
+        if let (true, Some(opacity), Some(body)) = (avatar, self.views.mesh_over, &mut self.body)
+            && !panes.iter().any(|(_, s)| *s == Shown::Mesh)
+        {
+            let mut mesh = body.frame(self.background);
+            mesh.style.overlay = Some(opacity);
+            self.paint_frame(ui, rect, rect, frame(Content::Mesh(mesh), 0));
+        }
+        if let [(left, l), (_, r)] = panes[..] {
+            self.split_ui(ui, rect, left.right(), [l, r]);
+        }
+        self.demo_hint(ui, rect);
+    }
+
+    /// Hands a frame to the view renderer, drawn over `rect` and seen only inside `clip`.
+    fn paint_frame(&self, ui: &egui::Ui, rect: egui::Rect, clip: egui::Rect, frame: Frame) {
         let callback = ViewportCallback {
             frame,
             report: self.report.clone(),
         };
         ui.painter()
+            .with_clip_rect(clip)
             .add(egui_wgpu::Callback::new_paint_callback(rect, callback));
-        // The refined frame covers the splat it was made from. The splatting view still gets its
-        // frame: unchanged, it draws nothing new, and its counters keep reaching the HUD.
-        if let Some(texture) = refined {
-            // Compare: the raw splat left of the split, the refined frame right of it.
-            let split = self.refined.split.unwrap_or(0.0);
-            let x = egui::lerp(rect.x_range(), split);
-            let shown = egui::Rect::from_min_max(egui::pos2(x, rect.top()), rect.max);
-            let uv = egui::Rect::from_min_max(egui::pos2(split, 0.0), egui::pos2(1.0, 1.0));
-            ui.painter().image(texture, shown, uv, egui::Color32::WHITE);
-            if self.refined.split.is_some() {
-                let painter = ui.painter();
-                let line = egui::Stroke::new(1.5, egui::Color32::from_gray(230));
-                painter.vline(x, rect.y_range(), line);
-                for (text, at, align) in [
-                    ("raw splat", x - 8.0, egui::Align2::RIGHT_TOP),
-                    ("refined", x + 8.0, egui::Align2::LEFT_TOP),
-                ] {
-                    painter.text(
-                        egui::pos2(at, rect.top() + 8.0),
-                        align,
-                        text,
-                        egui::FontId::proportional(14.0),
-                        egui::Color32::from_gray(230),
-                    );
-                }
+    }
+
+    /// The avatar's photo where its own camera sees it (the viewport's centred square, as
+    /// [`guava::camera::Camera::guava_in_viewport`] places it), seen inside `clip`.
+    fn photo_pane(&mut self, ui: &egui::Ui, rect: egui::Rect, clip: egui::Rect) {
+        let painter = ui.painter().with_clip_rect(clip);
+        let [r, g, b] = self.background.map(|c| (c.clamp(0.0, 1.0) * 255.0) as u8);
+        painter.rect_filled(rect, 0.0, egui::Color32::from_rgb(r, g, b));
+        match self.avatar.as_mut().map(|a| &mut a.fidelity) {
+            Some(Some(Ok(f))) => {
+                let (texture, uv) = f.photo(ui.ctx());
+                let side = rect.width().min(rect.height());
+                let square = egui::Rect::from_center_size(rect.center(), egui::vec2(side, side));
+                painter.image(texture, square, uv, egui::Color32::WHITE);
+            }
+            _ => {
+                painter.text(
+                    clip.center(),
+                    egui::Align2::CENTER_CENTER,
+                    "no photo: this avatar was not made here",
+                    egui::FontId::proportional(14.0),
+                    egui::Color32::from_gray(200),
+                );
             }
         }
-        self.demo_hint(ui, rect);
+    }
+
+    /// The split between two views: its line, what each side shows, and its handle (drag it).
+    fn split_ui(&mut self, ui: &egui::Ui, rect: egui::Rect, x: f32, shown: [Shown; 2]) {
+        let painter = ui.painter();
+        let light = egui::Color32::from_gray(230);
+        painter.vline(x, rect.y_range(), egui::Stroke::new(1.5, light));
+        for (s, at, align) in [
+            (shown[0], x - 8.0, egui::Align2::RIGHT_TOP),
+            (shown[1], x + 8.0, egui::Align2::LEFT_TOP),
+        ] {
+            let text = match (s, self.refined.showing) {
+                (Shown::Refined, false) => "refined (raw until it settles)",
+                _ => s.name(),
+            };
+            let at = egui::pos2(at, rect.top() + 8.0);
+            painter.text(at, align, text, egui::FontId::proportional(14.0), light);
+        }
+        let handle = egui::Rect::from_x_y_ranges(x - 5.0..=x + 5.0, rect.y_range());
+        let response = ui
+            .interact(
+                handle,
+                ui.make_persistent_id("viewport_split"),
+                egui::Sense::drag(),
+            )
+            .on_hover_cursor(egui::CursorIcon::ResizeHorizontal);
+        if let (Some(p), true, Some(c)) = (
+            response.interact_pointer_pos(),
+            response.dragged(),
+            &mut self.views.compare,
+        ) {
+            c.at = ((p.x - rect.left()) / rect.width()).clamp(0.0, 1.0);
+        }
     }
 
     /// On the demo portrait's avatar (the first launch), how to make one's own.
@@ -181,7 +286,7 @@ impl GuavaApp {
         }
     }
 
-    /// The refined frame of an avatar shown in colour, once ready (see
+    /// The refined frame of an avatar, once ready (see
     /// [`crate::refined`]); `None` while it is made, or when the refiner does not apply.
     fn refined_frame(
         &mut self,
@@ -199,12 +304,7 @@ impl GuavaApp {
         else {
             return None;
         };
-        let colour = self.display.mode == guava::render::present::PresentMode::Rgb
-            && self.display.rgb_channels == [0, 1, 2];
         let offscreen = self.gpu.offscreen.as_ref()?;
-        if !(self.refined.enabled && colour) {
-            return None;
-        }
         let networks = self.networks.as_ref().map(|n| n.dir.as_path());
         let refiner = guava::refine::refiner_for(avatar.avatar.kind, networks);
         self.refined.unavailable = refiner

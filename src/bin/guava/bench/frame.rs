@@ -207,6 +207,7 @@ fn interaction(
                 ),
                 scale,
                 preview,
+                pane: 0,
             };
             if let Some(commands) = view.prepare(device, queue, &frame, &mut report) {
                 queue.submit([commands]);
