@@ -573,8 +573,8 @@ fn eval_frames_compares_every_frame_of_a_tracked_video() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `guava render --sequence`: the whole motion at --fps (frames decode, at the asked size) and an
-/// animated GIF of as many frames; a still pose's turntable turns; bad rates are refused.
+/// `guava render --sequence`: the whole motion at --fps (frames decode, at the asked size), an
+/// animated GIF and an MP4 of as many frames; a still pose's turntable turns; bad rates are refused.
 #[test]
 fn render_sequence_writes_every_frame_along_the_camera_path() {
     let dir = std::env::temp_dir().join(format!("guava-cli-sequence-{}", std::process::id()));
@@ -585,12 +585,12 @@ fn render_sequence_writes_every_frame_along_the_camera_path() {
     assert!(ok, "{stderr}");
     let (ok, _, stderr) = guava(&["reconstruct", "--image", &s(&photo), "--out", &s(&avatar)]);
     assert!(ok, "{stderr}");
-    let (frames, gif) = (dir.join("frames"), dir.join("m.gif"));
+    let (frames, gif, mp4) = (dir.join("frames"), dir.join("m.gif"), dir.join("m.mp4"));
     let small = ["--width", "48", "--height", "64"];
     let avatar_s = s(&avatar);
     let mut args = vec!["render", "--avatar", &avatar_s];
     args.extend(small);
-    let (avatar_args, frames_s, gif_s) = (args.clone(), s(&frames), s(&gif));
+    let (avatar_args, frames_s, gif_s, mp4_s) = (args.clone(), s(&frames), s(&gif), s(&mp4));
     args.extend([
         "--motion",
         "assets/demo_motion.json",
@@ -602,6 +602,8 @@ fn render_sequence_writes_every_frame_along_the_camera_path() {
         "turntable",
         "--gif",
         &gif_s,
+        "--mp4",
+        &mp4_s,
     ]);
     let (ok, stdout, stderr) = guava(&args);
     assert!(ok, "{stderr}");
@@ -623,6 +625,18 @@ fn render_sequence_writes_every_frame_along_the_camera_path() {
     ))
     .expect("a GIF");
     assert_eq!(decoder.into_frames().count(), 17);
+    // The video: 17 samples at 2 fps, 48×64 (its pictures are checked in `sequence`'s tests).
+    let bytes = std::fs::read(&mp4).expect("mp4");
+    let reader = mp4::Mp4Reader::read_header(std::io::Cursor::new(&bytes), bytes.len() as u64)
+        .expect("an MP4");
+    let track = reader.tracks().get(&1).expect("one video track");
+    assert_eq!((track.width(), track.height()), (48, 64));
+    assert_eq!(track.sample_count(), 17);
+    assert!(
+        (track.duration().as_secs_f64() - 8.5).abs() < 1e-3,
+        "{:?}",
+        track.duration()
+    );
 
     // A still pose's turntable: --frames frames, and the view turns.
     let still = dir.join("still");

@@ -41,6 +41,7 @@ pub struct ExportSettings {
     pub path: CameraPath,
     pub fps: f32,
     pub gif: bool,
+    pub mp4: bool,
 }
 
 impl Default for ExportSettings {
@@ -52,6 +53,7 @@ impl Default for ExportSettings {
             path: CameraPath::Fixed,
             fps: 30.0,
             gif: true,
+            mp4: true,
         }
     }
 }
@@ -180,11 +182,11 @@ impl GuavaApp {
     }
 
     /// Writes the timeline as `frame_00000.png`, … in `dir` along the export's camera path
-    /// (and `sequence.gif` beside them): each frame posed from the motion with the hand-set
-    /// groups in place.
+    /// (and `sequence.gif`, `sequence.mp4` beside them): each frame posed from the motion with
+    /// the hand-set groups in place.
     pub fn export_sequence(&mut self, dir: PathBuf) {
         let s = &self.export;
-        let (w, h, fps, path, gif) = (s.width, s.height, s.fps, s.path, s.gif);
+        let (w, h, fps, path, gif, mp4) = (s.width, s.height, s.fps, s.path, s.gif, s.mp4);
         let shot = match self.shot() {
             Ok(s) => s,
             Err(e) => return self.error(e),
@@ -240,6 +242,11 @@ impl GuavaApp {
             if gif {
                 context.set_stage("writing the GIF");
                 sequence::write_gif(&written, fps, &dir.join("sequence.gif"))
+                    .map_err(|e| format!("{e:#}"))?;
+            }
+            if mp4 {
+                context.set_stage("writing the MP4");
+                sequence::write_mp4(&written, fps, &dir.join("sequence.mp4"))
                     .map_err(|e| format!("{e:#}"))?;
             }
             Ok(format!(
@@ -316,6 +323,7 @@ impl GuavaApp {
                     ui.add(egui::DragValue::new(&mut s.fps).range(1.0..=120.0));
                     ui.label("fps");
                     ui.checkbox(&mut s.gif, "and an animated GIF");
+                    ui.checkbox(&mut s.mp4, "and an MP4 (H.264)");
                 });
                 ui.label(
                     "The avatar as on screen (refined when the view refines); sequences follow \

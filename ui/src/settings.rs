@@ -21,6 +21,7 @@ pub struct Settings {
     export_size: [u32; 2],
     export_fps: f32,
     export_gif: bool,
+    export_mp4: bool,
     export_turntable: bool,
     recent: Vec<PathBuf>,
 }
@@ -35,6 +36,7 @@ impl Default for Settings {
             export_size: [1024, 1024],
             export_fps: 30.0,
             export_gif: true,
+            export_mp4: true,
             export_turntable: false,
             recent: Vec::new(),
         }
@@ -56,6 +58,7 @@ impl Settings {
             export_size: [e.width, e.height],
             export_fps: e.fps,
             export_gif: e.gif,
+            export_mp4: e.mp4,
             export_turntable: e.path == CameraPath::Turntable,
             recent: app.recent.clone(),
         };
@@ -83,6 +86,7 @@ impl Settings {
             e.fps = self.export_fps;
         }
         e.gif = self.export_gif;
+        e.mp4 = self.export_mp4;
         if self.export_turntable {
             e.path = CameraPath::Turntable;
         }

@@ -859,7 +859,7 @@ fn grouped_controls_pose_in_peoples_terms_override_the_motion_until_reset() {
 }
 
 /// Exports of the avatar on screen: the view as a PNG at the asked size, the demo motion as a
-/// turntable PNG sequence with its GIF, the posed avatar as a 3DGS PLY that reads back (y down)
+/// turntable PNG sequence with its GIF and MP4, the posed avatar as a 3DGS PLY that reads back (y down)
 /// and the posed body as glTF; a cancelled sequence leaves whole frames and says so.
 #[test]
 fn exports_write_the_view_a_sequence_a_ply_and_a_mesh() {
@@ -889,6 +889,10 @@ fn exports_write_the_view_a_sequence_a_ply_and_a_mesh() {
     let gif = std::fs::File::open(frames.join("sequence.gif")).expect("gif");
     let decoder = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(gif)).expect("gif");
     assert_eq!(decoder.into_frames().count(), 17);
+    let bytes = std::fs::read(frames.join("sequence.mp4")).expect("mp4");
+    let reader = mp4::Mp4Reader::read_header(std::io::Cursor::new(&bytes), bytes.len() as u64)
+        .expect("an MP4");
+    assert_eq!(reader.tracks().get(&1).expect("track").sample_count(), 17);
 
     // Cancelled right away: an error that says so, no half frame.
     let cancelled = dir.join("cancelled");

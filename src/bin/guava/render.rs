@@ -70,6 +70,9 @@ pub struct RenderArgs {
     /// With --sequence: also write the frames as one animated GIF (256 colours per frame).
     #[arg(long, requires = "sequence")]
     gif: Option<PathBuf>,
+    /// With --sequence: also write the frames as an H.264 MP4 video.
+    #[arg(long, requires = "sequence")]
+    mp4: Option<PathBuf>,
     /// Image size in pixels (1 to 8192).
     #[arg(long, default_value_t = 512, value_parser = args::image_side)]
     width: u32,
@@ -369,6 +372,10 @@ impl Frames<'_> {
         if let Some(gif) = &a.gif {
             sequence::write_gif(&written, fps, gif)?;
             println!("{} frames → {}", n, gif.display());
+        }
+        if let Some(mp4) = &a.mp4 {
+            sequence::write_mp4(&written, fps, mp4)?;
+            println!("{} frames → {}", n, mp4.display());
         }
         Ok(())
     }
