@@ -172,17 +172,24 @@ fn main(
         let n = min(BATCH, range.y - start);
         let pending_before = pending;
         // The walk: with SKIP_MISSED the set bits of this block's masks, else every batched Gaussian.
+        // The next mask word is fetched by an iteration of this one loop: the same fetch as a
+        // nested `while` made llvmpipe leave whole blocks without a Gaussian in dense tiles
+        // (test a_dense_avatar_drawn_small_matches_the_reference_on_every_tuning).
         var mask_word = 0u;
         var bits = 0u;
         var next = 0u;
         loop {
             var j: u32;
             if SKIP_MISSED == 1u {
-                while bits == 0u && mask_word < MASK_WORDS {
+                if bits == 0u {
+                    if mask_word == MASK_WORDS || block_done(pending, lane) {
+                        break;
+                    }
                     bits = block_masks[block * MASK_WORDS + mask_word];
                     mask_word++;
+                    continue;
                 }
-                if bits == 0u || block_done(pending, lane) {
+                if block_done(pending, lane) {
                     break;
                 }
                 j = (mask_word - 1u) * 32u + firstTrailingBit(bits);
