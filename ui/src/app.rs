@@ -80,6 +80,8 @@ pub enum CameraMode {
     Source,
     /// The motion's tracked camera at the current time.
     Tracked,
+    /// The camera path keyed by hand, at the timeline's time.
+    Keys,
 }
 
 /// GUAVA mode's networks, shared with reconstruction workers (a session runs one call at a time).
@@ -127,6 +129,8 @@ pub struct GuavaApp {
     pub(crate) view: View,
     pub(crate) orbit: OrbitCamera,
     pub(crate) camera_mode: CameraMode,
+    /// The camera path keyed by hand (camera mode *keys*, sequence exports).
+    pub(crate) camera_keys: crate::camera_keys::CameraKeys,
     pub(crate) display: Display,
     /// The refiner pass, run when the view settles.
     pub(crate) refined: RefinedView,
@@ -208,6 +212,7 @@ impl GuavaApp {
             view: View::Body,
             orbit: OrbitCamera::default(),
             camera_mode: CameraMode::Orbit,
+            camera_keys: Default::default(),
             display: Display::default(),
             refined: RefinedView::default(),
             export: Default::default(),
@@ -359,6 +364,16 @@ impl GuavaApp {
     /// Shows the avatar's photo beside it in the viewport (where it was made here).
     pub fn set_photo_beside(&mut self, beside: bool) {
         self.display_photo_beside = beside;
+    }
+
+    /// The camera path keyed by hand.
+    pub fn camera_keys_mut(&mut self) -> &mut crate::camera_keys::CameraKeys {
+        &mut self.camera_keys
+    }
+
+    /// The timeline's time (0 without a motion).
+    pub fn time(&self) -> f64 {
+        self.motion.as_ref().map_or(0.0, |m| m.player.time())
     }
 
     /// Two views side by side (`None`: one view, as the display panel sets it).

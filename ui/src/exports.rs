@@ -31,6 +31,8 @@ pub enum CameraPath {
     Turntable,
     /// The motion's tracked camera.
     Tracked,
+    /// The camera path keyed by hand (Camera panel).
+    Keys,
 }
 
 /// The export window's settings (kept between exports).
@@ -201,12 +203,16 @@ impl GuavaApp {
         if path == CameraPath::Tracked && self.motion.as_ref().and_then(|m| m.camera()).is_none() {
             return self.error("the tracked camera path needs a motion with cameras".into());
         }
+        if path == CameraPath::Keys && self.camera_keys.is_empty() {
+            return self.error("the keyed camera path has no keys (Camera > Camera path)".into());
+        }
         let times = match &posing.motion {
             Some((tracking, _)) => sequence::frame_times(tracking.duration(), fps),
             None => vec![0.0; (2.0 * fps) as usize],
         };
         let fixed = self.view_camera(w, h);
         let orbit = self.orbit;
+        let keys = self.camera_keys.clone();
         let tracking = posing.motion.as_ref().map(|(t, _)| t.clone());
         self.start_export(&dir.clone(), move |context| {
             std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -233,6 +239,7 @@ impl GuavaApp {
                         .and_then(|t| guava::tracking::camera_at(t, time))
                         .map(|(w2c, f)| Camera::guava_in_viewport(w2c, f, w, h))
                         .ok_or("the motion has no camera at this time")?,
+                    CameraPath::Keys => keys.at(time).ok_or("no camera keys")?.camera(w, h),
                 };
                 let image = shot.draw(&mut refiner, &posing.at(time)?, &camera)?;
                 let file = sequence::frame_path(&dir, i);
@@ -318,6 +325,7 @@ impl GuavaApp {
                     ui.selectable_value(&mut s.path, CameraPath::Fixed, "fixed");
                     ui.selectable_value(&mut s.path, CameraPath::Turntable, "turntable");
                     ui.selectable_value(&mut s.path, CameraPath::Tracked, "tracked");
+                    ui.selectable_value(&mut s.path, CameraPath::Keys, "keys");
                 });
                 ui.horizontal(|ui| {
                     ui.add(egui::DragValue::new(&mut s.fps).range(1.0..=120.0));

@@ -5,6 +5,7 @@ pub mod app;
 pub mod avatar_view;
 pub mod body_model;
 pub mod body_panel;
+pub mod camera_keys;
 pub mod compare;
 mod exports;
 mod fidelity;

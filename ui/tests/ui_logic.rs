@@ -1143,3 +1143,65 @@ fn the_mesh_is_drawn_over_the_avatar() {
     // Off again (the refined frame may have replaced the raw one meanwhile: not equal).
     assert!(after < 2 * before.max(1000), "{over} → {after}");
 }
+
+/// A camera path keyed by hand: an export along it starts at the first key's view and ends at
+/// the last's (the same pictures as fixed exports from those two orbits), and turns between.
+#[test]
+fn a_keyed_camera_path_is_flown_by_the_export() {
+    let mut h = synthetic_avatar();
+    let dir = std::env::temp_dir().join(format!("guava-ui-keys-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let settings = h.state_mut().export_settings();
+    (settings.width, settings.height, settings.fps) = (64, 64, 1.0);
+    let (front, back) = {
+        let orbit = h.state_mut().orbit_mut();
+        let front = *orbit;
+        (
+            front,
+            guava_ui::orbit::OrbitCamera {
+                yaw_rad: std::f32::consts::PI,
+                ..front
+            },
+        )
+    };
+    let keys = h.state_mut().camera_keys_mut();
+    keys.set(0.0, front);
+    keys.set(8.0, back);
+    let export = |h: &mut Harness<'static, GuavaApp>, name: &str, path, orbit| {
+        *h.state_mut().orbit_mut() = orbit;
+        h.state_mut().export_settings().path = path;
+        let out = dir.join(name);
+        h.state_mut().export_sequence(out.clone());
+        let status = wait_for_status(h, name);
+        assert!(status.contains("wrote 9 frames"), "{status}");
+        move |i| {
+            image::open(guava::render::sequence::frame_path(&out, i))
+                .expect("frame")
+                .to_rgb8()
+        }
+    };
+    use guava_ui::CameraPath::{Fixed, Keys};
+    let keyed = export(&mut h, "keyed", Keys, front);
+    let fixed_front = export(&mut h, "front", Fixed, front);
+    let fixed_back = export(&mut h, "back", Fixed, back);
+    let differ = |a: &image::RgbImage, b: &image::RgbImage| {
+        a.as_raw()
+            .iter()
+            .zip(b.as_raw())
+            .map(|(x, y)| x.abs_diff(*y) as f64)
+            .sum::<f64>()
+            / a.as_raw().len() as f64
+    };
+    // A fixed export poses every frame from the timeline too: compare at the same times.
+    assert!(
+        differ(&keyed(0), &fixed_front(0)) < 0.5,
+        "starts at the first key"
+    );
+    assert!(
+        differ(&keyed(8), &fixed_back(8)) < 0.5,
+        "ends at the last key"
+    );
+    assert!(differ(&keyed(4), &fixed_front(4)) > 2.0, "turned between");
+    assert!(differ(&keyed(4), &fixed_back(4)) > 2.0, "turned between");
+    std::fs::remove_dir_all(&dir).ok();
+}

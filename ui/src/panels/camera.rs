@@ -1,5 +1,5 @@
-//! The camera panel: orbit, the source photo's camera or the motion's tracked camera, the orbit's
-//! angles, distance and field of view, and framing what is shown.
+//! The camera panel: orbit, the source photo's camera, the motion's tracked camera or the keyed
+//! path, the orbit's angles, distance and field of view, framing what is shown, and the keys.
 
 use guava::camera::Camera;
 
@@ -22,6 +22,10 @@ impl GuavaApp {
             ui.add_enabled_ui(tracked, |ui| {
                 ui.selectable_value(&mut self.camera_mode, CameraMode::Tracked, "tracked")
                     .on_hover_text("the motion's tracked camera, following the timeline");
+            });
+            ui.add_enabled_ui(!self.camera_keys.is_empty(), |ui| {
+                ui.selectable_value(&mut self.camera_mode, CameraMode::Keys, "keys")
+                    .on_hover_text("the camera path keyed below, following the timeline");
             });
         });
         let mut moved = false;
@@ -64,6 +68,15 @@ impl GuavaApp {
             moved = true;
             self.reset_camera();
         }
+        let time = self.time();
+        egui::CollapsingHeader::new("Camera path (keys)")
+            .default_open(false)
+            .show(ui, |ui| {
+                if let Some(key) = self.camera_keys.ui(ui, time, self.orbit) {
+                    self.orbit = key;
+                    moved = true;
+                }
+            });
         if moved {
             self.camera_mode = CameraMode::Orbit;
         }
@@ -94,6 +107,10 @@ impl GuavaApp {
     /// photo's or the tracked one) when chosen and available, else the orbit.
     pub(crate) fn view_camera(&self, width: u32, height: u32) -> Camera {
         let fixed = match self.camera_mode {
+            CameraMode::Keys => {
+                let keyed = self.camera_keys.at(self.time());
+                return keyed.unwrap_or(self.orbit).camera(width, height);
+            }
             CameraMode::Orbit => None,
             CameraMode::Source => self.avatar.as_ref().and_then(|a| a.source_camera),
             CameraMode::Tracked => self.motion.as_ref().and_then(|m| m.camera()),
