@@ -61,6 +61,18 @@ impl GuavaApp {
                     .text("distance"),
             )
             .changed();
+        ui.horizontal(|ui| {
+            let label = ui.label("pan (target)");
+            for v in [&mut o.target.x, &mut o.target.y, &mut o.target.z] {
+                moved |= ui
+                    .add(egui::DragValue::new(v).speed(0.005).max_decimals(3))
+                    .labelled_by(label.id)
+                    .on_hover_text(
+                        "the point the orbit turns around (or drag with the right button)",
+                    )
+                    .changed();
+            }
+        });
         o.yaw_rad = yaw.to_radians();
         o.pitch_rad = pitch.to_radians();
         o.fov_y_rad = fov.to_radians();
