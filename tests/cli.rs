@@ -473,7 +473,7 @@ fn guava_mode_fits_photos_without_tracking() {
 /// 25.4 dB, SSIM 0.945, L1 0.0074). Over the person's box most of what is lost is at the
 /// outline, where the splats' soft edge meets the photo's antialiased one; inside it the same
 /// avatar matches at 47.9 dB (`reconstruction_re_renders_the_photo`). A wrong camera, pose or
-/// mask would cost tens of percent of IoU.
+/// mask would cost tens of percent of IoU. `--lpips` adds LPIPS.
 #[test]
 fn eval_prints_the_metrics_of_a_known_answer() {
     let dir = std::env::temp_dir().join(format!("guava-cli-eval-{}", std::process::id()));
@@ -508,6 +508,20 @@ fn eval_prints_the_metrics_of_a_known_answer() {
     assert!(value("ssim") > 0.93 && value("l1") < 0.01, "{line}");
     let written = image::open(&side).expect("side by side").to_rgb8();
     assert_eq!(written.dimensions(), (3 * 512, 512));
+    // With an LPIPS model (the tiny random test one: the plumbing, not the metric) a value more.
+    let lpips = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/lpips/tiny_lpips.onnx"
+    );
+    let (ok, stdout, stderr) = guava(&[&args[..5], &["--lpips", lpips]].concat());
+    assert!(ok, "{stderr}");
+    let d: f64 = stdout
+        .split_whitespace()
+        .find_map(|f| f.strip_prefix("lpips="))
+        .unwrap_or_else(|| panic!("lpips in {stdout}"))
+        .parse()
+        .expect("a number");
+    assert!(d.is_finite() && d > 0.0, "{stdout}");
     std::fs::remove_dir_all(&dir).ok();
 }
 

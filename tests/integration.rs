@@ -16,6 +16,7 @@ mod framing;
 mod fuzz;
 mod guava_mode;
 mod guava_models;
+mod lpips;
 mod mesh_view;
 mod onnx_runtime;
 mod ply;

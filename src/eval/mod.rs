@@ -1,7 +1,9 @@
 //! How faithful an avatar is to its photo: the avatar re-rendered through the frame path from the
 //! view its photo was seen from, compared with the photo × person mask ([`metrics`]): silhouette
-//! IoU, and PSNR, SSIM and L1 over the person's box.
+//! IoU, and PSNR, SSIM and L1 over the person's box; LPIPS there too with a model the user gives
+//! ([`lpips`]).
 
+pub mod lpips;
 pub mod metrics;
 pub mod subjects;
 
@@ -28,6 +30,8 @@ pub enum EvalError {
     Render(#[from] AvatarRenderError),
     #[error(transparent)]
     Pose(#[from] crate::body::PoseError),
+    #[error(transparent)]
+    Lpips(#[from] lpips::LpipsError),
 }
 
 /// `avatar` on `body` as `view` sees it, rendered through the frame path at the view's size on
@@ -74,6 +78,23 @@ pub fn compare(rendered: &SplatImage, photo: &SourceImage) -> Result<Metrics, Ev
         size,
         bounds,
     ))
+}
+
+/// LPIPS between `rendered` and `photo` (as [`compare`] takes them) over the person's box.
+pub fn perceptual(
+    model: &mut lpips::Lpips,
+    rendered: &SplatImage,
+    photo: &SourceImage,
+) -> Result<f64, EvalError> {
+    let size = photo.size as usize;
+    let mask = photo.mask.as_deref().ok_or(EvalError::NoPerson)?;
+    let bounds = metrics::person_box(mask, size).ok_or(EvalError::NoPerson)?;
+    let [x0, y0, x1, y1] = bounds;
+    let (a, b) = (
+        lpips::crop(&interleaved_rgb(rendered), size, bounds),
+        lpips::crop(&photo.rgb, size, bounds),
+    );
+    Ok(model.distance(&a, &b, x1 - x0, y1 - y0)?)
 }
 
 /// A render's first three channels (or its one, grey) as interleaved RGB clamped to [0, 1], as

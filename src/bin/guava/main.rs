@@ -149,6 +149,10 @@ enum Command {
         /// Also write the photo, the render and their difference side by side as PNG.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Also LPIPS, with this ONNX model (tools/export_lpips_onnx.py makes LPIPS-Alex, the
+        /// paper's, from the lpips package and torchvision's AlexNet weights).
+        #[arg(long)]
+        lpips: Option<PathBuf>,
         #[command(flatten)]
         keypoints: photo::KeypointArgs,
     },
@@ -264,6 +268,7 @@ fn run(cli: Cli) -> Result<()> {
             tracking,
             ehm,
             out,
+            lpips,
             keypoints,
         } => {
             let target = match (image, frames) {
@@ -277,6 +282,7 @@ fn run(cli: Cli) -> Result<()> {
                 tracking.as_deref(),
                 ehm.as_deref(),
                 out.as_deref(),
+                lpips.as_deref(),
                 &keypoints,
             )
         }

@@ -236,14 +236,30 @@ pub fn eval(
     tracking: Option<&Path>,
     ehm: Option<&Path>,
     out: Option<&Path>,
+    lpips: Option<&Path>,
     keypoints: &KeypointArgs,
 ) -> Result<()> {
     let avatar_file = guava::avatar::Avatar::load(avatar)?;
+    let mut lpips = match lpips {
+        Some(path) => Some(guava::eval::lpips::Lpips::load(
+            guava::onnx::OnnxRuntime::load()?,
+            path,
+        )?),
+        None => None,
+    };
     match ehm {
         Some(path) => {
             let mut body = EhmModel::load(path)?;
             avatar_file.apply_ehm_identity(&mut body);
-            eval_on(&avatar_file, &body, target, tracking, out, keypoints)
+            eval_on(
+                &avatar_file,
+                &body,
+                target,
+                tracking,
+                out,
+                &mut lpips,
+                keypoints,
+            )
         }
         None => eval_on(
             &avatar_file,
@@ -251,6 +267,7 @@ pub fn eval(
             target,
             tracking,
             out,
+            &mut lpips,
             keypoints,
         ),
     }
@@ -263,6 +280,7 @@ fn eval_on(
     target: &Target,
     tracking: Option<&Path>,
     out: Option<&Path>,
+    lpips: &mut Option<guava::eval::lpips::Lpips>,
     keypoints: &KeypointArgs,
 ) -> Result<()> {
     avatar.check_body(body).map_err(anyhow::Error::msg)?;
@@ -271,7 +289,7 @@ fn eval_on(
     let image = match target {
         Target::Frames(dir) => {
             let path = tracking.expect("clap requires --tracking with --frames");
-            return reenact(avatar, body, dir, path, &mut pipeline, &mut renderer);
+            return reenact(avatar, body, dir, path, &mut pipeline, &mut renderer, lpips);
         }
         Target::Photo(image) => image,
     };
@@ -288,7 +306,11 @@ fn eval_on(
     let photo = pipeline.masked_photo(Photo::File(image), &view, &mut |_| true)?;
     let (metrics, rendered) =
         guava::eval::evaluate(&mut renderer, avatar, body, Some(&view), &photo)?;
-    println!("{metrics}");
+    let d = match lpips {
+        Some(model) => guava::eval::perceptual(model, &rendered, &photo)?,
+        None => f64::NAN,
+    };
+    println!("{metrics}{}", lpips_text(d));
     if let Some(path) = out {
         guava::render::save_png(&guava::eval::side_by_side(&photo, &rendered), path)?;
         println!("photo | render | difference → {}", path.display());
@@ -306,6 +328,7 @@ fn reenact(
     tracking: &Path,
     pipeline: &mut guava::pipeline::Pipeline,
     renderer: &mut guava::render::HeadlessRenderer,
+    lpips: &mut Option<guava::eval::lpips::Lpips>,
 ) -> Result<()> {
     let t = guava::tracking::Tracking::load(tracking)?;
     let mut frames: Vec<PathBuf> = std::fs::read_dir(dir)
@@ -328,28 +351,42 @@ fn reenact(
         );
     }
     let file = tracking.display().to_string();
-    let mut sums = [0.0f64; 4];
+    let mut sums = [0.0f64; 5];
     for (i, frame) in frames.iter().enumerate() {
         let mut view = SourceView::at_frame(&t, body, i, &file)?;
         avatar.apply_identity(body, &mut view.pose);
         let photo = pipeline.masked_photo(Photo::File(frame), &view, &mut |_| true)?;
-        let (m, _) = guava::eval::evaluate(renderer, avatar, body, Some(&view), &photo)
+        let (m, rendered) = guava::eval::evaluate(renderer, avatar, body, Some(&view), &photo)
             .with_context(|| frame.display().to_string())?;
-        println!("frame {i}: {m}");
-        for (s, v) in sums.iter_mut().zip([m.iou, m.psnr, m.ssim, m.l1]) {
+        let d = match lpips.as_mut() {
+            Some(model) => guava::eval::perceptual(model, &rendered, &photo)
+                .with_context(|| frame.display().to_string())?,
+            None => f64::NAN,
+        };
+        println!("frame {i}: {m}{}", lpips_text(d));
+        for (s, v) in sums.iter_mut().zip([m.iou, m.psnr, m.ssim, m.l1, d]) {
             *s += v;
         }
     }
     let n = frames.len().max(1) as f64;
     println!(
-        "mean over {} frames: iou={:.4} psnr={:.2} ssim={:.4} l1={:.4}",
+        "mean over {} frames: iou={:.4} psnr={:.2} ssim={:.4} l1={:.4}{}",
         frames.len(),
         sums[0] / n,
         sums[1] / n,
         sums[2] / n,
-        sums[3] / n
+        sums[3] / n,
+        lpips_text(sums[4] / n)
     );
     Ok(())
+}
+
+/// ` lpips=…` where it was measured (not NaN), else nothing.
+fn lpips_text(d: f64) -> String {
+    match d.is_nan() {
+        true => String::new(),
+        false => format!(" lpips={d:.4}"),
+    }
 }
 
 /// The synthetic subjects `guava synth-photo` draws.
