@@ -5,8 +5,9 @@
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> gaussians: array<Gaussian>;
-// Each Gaussian's features are zero-padded to a multiple of four channels (see the rasterizer).
-@group(0) @binding(2) var<storage, read> features: array<vec4<f32>>;
+// Each Gaussian's features are zero-padded to a multiple of four channels (see the rasterizer),
+// stored as f32 or f16 (shaders/features_*.wgsl).
+@group(0) @binding(2) var<storage, read> features: array<FeatureWord>;
 @group(0) @binding(3) var<storage, read_write> projected: array<Projected>;
 @group(0) @binding(4) var<storage, read_write> depth_keys: array<u32>;
 @group(0) @binding(5) var<storage, read_write> depth_order: array<u32>;
@@ -48,7 +49,7 @@ fn main(
     // lets a CPU adapter's SIMD row stop early, see radix_sort.wgsl).
     let words = (frame.channels + 3u) / 4u;
     for (var q = 0u; q < words && finite; q++) {
-        finite = all_finite(features[i * words + q]);
+        finite = all_finite(feature_vec(features[i * words + q]));
     }
     if !finite {
         atomicAdd(&stats[STAT_NONFINITE], 1u);

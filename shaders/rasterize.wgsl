@@ -24,9 +24,10 @@
 @group(0) @binding(1) var<storage, read> ranges: array<vec2<u32>>;
 @group(0) @binding(2) var<storage, read> tile_vals: array<u32>;
 @group(0) @binding(3) var<storage, read> projected: array<Projected>;
-// Each Gaussian's features as FEATURE_WORDS vec4s (zero-padded to a multiple of four channels): a
-// pixel reads and accumulates a quarter as many words as with one float per load.
-@group(0) @binding(4) var<storage, read> features: array<vec4<f32>>;
+// Each Gaussian's features as FEATURE_WORDS words of four channels (zero-padded to a multiple of
+// four; f32 or f16, shaders/features_*.wgsl): a pixel reads and accumulates a quarter as many
+// words as with one float per load.
+@group(0) @binding(4) var<storage, read> features: array<FeatureWord>;
 const FEATURE_WORDS: u32 = (CHANNELS + 3u) / 4u;
 @group(0) @binding(5) var<storage, read> background: array<f32>;
 @group(0) @binding(6) var out_features: texture_storage_2d_array<r32float, write>;
@@ -157,7 +158,7 @@ fn main(
             batch[lid * BATCH_VECS] = vec4<u32>(bitcast<vec2<u32>>(p.xy), bitcast<u32>(1.0 / p.depth), id);
             batch[lid * BATCH_VECS + 1u] = bitcast<vec4<u32>>(p.conic_opacity);
             if PACKED {
-                batch[lid * BATCH_VECS + 2u] = bitcast<vec4<u32>>(features[id]);
+                batch[lid * BATCH_VECS + 2u] = bitcast<vec4<u32>>(feature_vec(features[id]));
             }
             if SKIP_MISSED == 1u {
                 reach = blocks_reached(p.xy, p.conic_opacity, p.q_limit, origin);

@@ -20,7 +20,7 @@ fn hold_features(id: u32, lane: u32) -> HeldFeatures {
 }
 
 fn feature_word(held: HeldFeatures, id: u32, q: u32) -> vec4<f32> {
-    return features[id * FEATURE_WORDS + q];
+    return feature_vec(features[id * FEATURE_WORDS + q]);
 }
 
 fn block_done(pending: u32, lane: u32) -> bool {

@@ -34,7 +34,7 @@ alias HeldFeatures = array<vec4<f32>, FEATURE_WORDS>;
 fn hold_features(id: u32, lane: u32) -> HeldFeatures {
     var loaded: array<vec4<f32>, FEATURE_ROUNDS>;
     for (var r = 0u; r < FEATURE_ROUNDS; r++) {
-        loaded[r] = features[id * FEATURE_WORDS + min(r * BLOCK_THREADS + lane, FEATURE_WORDS - 1u)];
+        loaded[r] = feature_vec(features[id * FEATURE_WORDS + min(r * BLOCK_THREADS + lane, FEATURE_WORDS - 1u)]);
     }
     var held: HeldFeatures;
     for (var q = 0u; q < FEATURE_WORDS; q++) {

@@ -696,9 +696,9 @@ fn report_quick_writes_every_file_with_finite_numbers() {
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(
         rows.len(),
-        (6 + 1) * 2 * 2,
-        "6 Gaussian sets at the default UV side and all of one other UV side × 2 output sides × \
-         refiner off/on"
+        (6 + 1 + 1) * 2 * 2,
+        "6 Gaussian sets at the default UV side, all of them stored as f16 and all of one other \
+         UV side × 2 output sides × refiner off/on"
     );
     for row in &rows {
         for (name, cell) in header.iter().zip(row) {

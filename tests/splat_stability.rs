@@ -167,7 +167,8 @@ fn one_million_gaussians() {
 fn a_cloud_too_big_for_the_adapter_is_an_error() {
     let mut r = renderer();
     let limits = r.gpu.device.limits();
-    let max = guava::render::splatter::max_gaussians(&limits, 64);
+    let max =
+        guava::render::splatter::max_gaussians(&limits, 64, guava::render::FeatureStorage::F32);
     // Only build the oversize cloud's metadata cheaply: positions etc. for max+1 Gaussians.
     let n = (max + 1) as usize;
     if n > 4_000_000 {

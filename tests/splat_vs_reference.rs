@@ -7,21 +7,31 @@
 //! is why the max-error bound is 1e-3 rather than f32 round-off; the PSNR bound checks that such
 //! pixels stay rare.
 
-use crate::common::{assert_all_finite, assert_stats_match, diff, renderers};
+use crate::common::{assert_all_finite, assert_stats_match, diff, renderers, renderers_storing};
 use glam::{Mat4, Vec3};
 use guava::camera::{Camera, GUAVA_INVTANFOV, orbit};
 use guava::gaussians::GaussianCloud;
 use guava::gaussians::synthetic::BallCloud;
-use guava::render::reference;
+use guava::render::{FeatureStorage, reference};
 
 fn check(name: &str, cloud: &GaussianCloud, camera: &Camera, background: &[f32]) {
+    check_storing(FeatureStorage::F32, name, cloud, camera, background);
+}
+
+fn check_storing(
+    storage: FeatureStorage,
+    name: &str,
+    cloud: &GaussianCloud,
+    camera: &Camera,
+    background: &[f32],
+) {
     let (cpu, cpu_stats) = reference::render(cloud, camera, background);
     assert!(
         cpu_stats.visible > 0,
         "{name}: the scene must draw something"
     );
-    for mut r in renderers() {
-        let name = format!("{name} [{:?}]", r.pipelines.tuning);
+    for mut r in renderers_storing(storage) {
+        let name = format!("{name} [{:?}, {storage:?}]", r.pipelines.tuning);
         let (gpu, gpu_stats) = r.render(cloud, camera, background).expect("cloud fits");
         assert_all_finite(&gpu, &name);
         let d = diff(&gpu, &cpu);
@@ -106,6 +116,39 @@ fn channel_counts_around_the_vec4_padding() {
             &background,
         );
     }
+}
+
+/// Features stored as f16 (half the feature memory: 8 instead of 16 bytes a Gaussian at four
+/// channels, 64 instead of 128 at 32) stay within the same bounds against the f64 reference on
+/// the unrounded features: f16 keeps 11 significant bits, 2.4e-4 at most on values in [0, 1],
+/// and a pixel's weights sum to at most 1. A feature beyond f16's range (65504) is stored as Inf
+/// and its Gaussian culled as non-finite.
+#[test]
+fn f16_feature_storage() {
+    for (channels, seed) in [(3, 11), (4, 12), (5, 13), (32, 14), (33, 15)] {
+        let cloud = BallCloud::new(1500, channels, seed).generate();
+        let camera =
+            Camera::from_fov_y(orbit(Vec3::ZERO, 3.0, 0.3, 0.1), 96, 80, 50f32.to_radians());
+        let background: Vec<f32> = (0..channels).map(|c| c as f32 / 16.0).collect();
+        let name = format!("random {channels}ch 96×80");
+        check_storing(FeatureStorage::F16, &name, &cloud, &camera, &background);
+    }
+    let mut cloud = BallCloud::new(500, 4, 16).generate();
+    let camera = Camera::from_fov_y(orbit(Vec3::ZERO, 3.0, 0.3, 0.1), 64, 64, 50f32.to_radians());
+    for f in cloud.features.iter_mut().skip(2).step_by(40) {
+        *f = 1e5;
+    }
+    let mut halves = renderers_storing(FeatureStorage::F16).remove(0);
+    let (_, stats) = halves.render(&cloud, &camera, &[0.0; 4]).expect("fits");
+    assert_eq!(stats.nonfinite, 50, "{stats:?}");
+    let mut full = renderers_storing(FeatureStorage::F32).remove(0);
+    full.render(&cloud, &camera, &[0.0; 4]).expect("fits");
+    let (h, f) = (halves.splatter.memory(), full.splatter.memory());
+    assert_eq!(
+        f.bytes_per_gaussian - h.bytes_per_gaussian,
+        8,
+        "{h:?} vs {f:?}"
+    );
 }
 
 #[test]

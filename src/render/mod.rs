@@ -17,7 +17,7 @@ mod timing;
 pub mod view;
 
 pub use layout::GpuGaussian;
-pub use pipelines::{RasterTuning, SplatPipelines};
+pub use pipelines::{FeatureStorage, RasterTuning, SplatPipelines};
 pub use readback::wait;
 pub use rig::GpuAvatar;
 pub use splatter::{Splatter, Stage};
@@ -186,7 +186,17 @@ impl HeadlessRenderer {
     }
 
     pub fn with_tuning(gpu: GpuContext, tuning: RasterTuning) -> Self {
-        let pipelines = Arc::new(SplatPipelines::new(&gpu.device, tuning));
+        Self::with_options(gpu, tuning, FeatureStorage::F32)
+    }
+
+    /// With the device's rasterizer layout and features stored as `storage`.
+    pub fn with_storage(gpu: GpuContext, storage: FeatureStorage) -> Self {
+        let tuning = RasterTuning::for_device(&gpu.adapter.get_info(), gpu.device.features());
+        Self::with_options(gpu, tuning, storage)
+    }
+
+    pub fn with_options(gpu: GpuContext, tuning: RasterTuning, storage: FeatureStorage) -> Self {
+        let pipelines = Arc::new(SplatPipelines::with_storage(&gpu.device, tuning, storage));
         let splatter = Splatter::new(&gpu.device, pipelines.clone());
         Self {
             gpu,

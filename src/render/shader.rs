@@ -17,6 +17,10 @@ pub const RASTERIZE_SHUFFLES: &str = concat!(
     include_str!("../../shaders/rasterize_fetch_shuffles.wgsl"),
     include_str!("../../shaders/rasterize.wgsl")
 );
+/// How the passes that read features (preprocess, rasterize) take them: f32 or f16 words of four
+/// channels (shaders/features_*.wgsl), composed before the pass ([`with_features`]).
+pub const FEATURES_F32: &str = include_str!("../../shaders/features_f32.wgsl");
+pub const FEATURES_F16: &str = include_str!("../../shaders/features_f16.wgsl");
 pub const RIG: &str = include_str!("../../shaders/rig.wgsl");
 pub const PRESENT: &str = include_str!("../../shaders/present.wgsl");
 pub const MESH: &str = include_str!("../../shaders/mesh.wgsl");
@@ -48,6 +52,15 @@ const ALL: &[(&str, &str, Consts)] = &[
     ("present", PRESENT, &[]),
     ("mesh", MESH, &[]),
 ];
+
+/// `pass` reading features stored as `storage`.
+pub fn with_features(storage: super::FeatureStorage, pass: &str) -> String {
+    let features = match storage {
+        super::FeatureStorage::F32 => FEATURES_F32,
+        super::FeatureStorage::F16 => FEATURES_F16,
+    };
+    format!("{features}\n{pass}")
+}
 
 pub fn compose(pass: &str, consts: &[(&str, u32)]) -> String {
     let mut out = String::new();
@@ -81,17 +94,24 @@ mod tests {
         TRIANGLE_FRAME_SIZE, TemplateGaussian, UvGaussian,
     };
     use crate::render::present::PresentUniform;
-    use crate::render::shader;
+    use crate::render::{FeatureStorage, shader};
     use wgpu::naga;
 
     fn module(name: &str) -> naga::Module {
         let (_, src, consts) = shader::ALL.iter().find(|(n, _, _)| *n == name).expect(name);
-        validated(name, src, consts)
+        validated(name, src, consts, FeatureStorage::F32)
     }
 
-    /// A pass with its constants, parsed and validated (panics naming `label` otherwise).
-    fn validated(label: &str, src: &str, consts: &[(&str, u32)]) -> naga::Module {
-        let module = naga::front::wgsl::parse_str(&shader::compose(src, consts))
+    /// A pass with its constants and feature storage (an alias and a function the passes that
+    /// do not read features leave unused), parsed and validated (panics naming `label` otherwise).
+    fn validated(
+        label: &str,
+        src: &str,
+        consts: &[(&str, u32)],
+        storage: FeatureStorage,
+    ) -> naga::Module {
+        let src = shader::with_features(storage, src);
+        let module = naga::front::wgsl::parse_str(&shader::compose(&src, consts))
             .unwrap_or_else(|e| panic!("{label}: {e}"));
         naga::valid::Validator::new(
             naga::valid::ValidationFlags::all(),
@@ -107,22 +127,23 @@ mod tests {
         for (name, _, _) in shader::ALL {
             module(name);
         }
-        // The rasterizer at the channel counts, layouts and tunings we use and the bounds we support.
-        for c in [1, 3, 32, 64] {
-            for p in [1, 2, 4, 8] {
-                for skip in [0, 1] {
-                    let consts = [("CHANNELS", c), ("PIXELS", p), ("SKIP_MISSED", skip)];
-                    validated(
-                        &format!("rasterize {consts:?}"),
-                        shader::RASTERIZE_LOADS,
-                        &consts,
-                    );
+        // The rasterizer at the channel counts, layouts, tunings and feature storages we use and
+        // the bounds we support.
+        for s in [FeatureStorage::F32, FeatureStorage::F16] {
+            validated("preprocess", shader::PREPROCESS, &[], s);
+            for c in [1, 3, 32, 64] {
+                for p in [1, 2, 4, 8] {
+                    for skip in [0, 1] {
+                        let consts = [("CHANNELS", c), ("PIXELS", p), ("SKIP_MISSED", skip)];
+                        let label = format!("rasterize {s:?} {consts:?}");
+                        validated(&label, shader::RASTERIZE_LOADS, &consts, s);
+                    }
                 }
-            }
-            for p in [1, 4] {
-                let consts = [("CHANNELS", c), ("PIXELS", p), ("SKIP_MISSED", 1)];
-                let label = format!("rasterize with shuffles {consts:?}");
-                validated(&label, shader::RASTERIZE_SHUFFLES, &consts);
+                for p in [1, 4] {
+                    let consts = [("CHANNELS", c), ("PIXELS", p), ("SKIP_MISSED", 1)];
+                    let label = format!("rasterize with shuffles {s:?} {consts:?}");
+                    validated(&label, shader::RASTERIZE_SHUFFLES, &consts, s);
+                }
             }
         }
     }

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use guava::gpu::GpuContext;
-use guava::render::{HeadlessRenderer, RasterTuning, RenderStats, SplatImage};
+use guava::render::{FeatureStorage, HeadlessRenderer, RasterTuning, RenderStats, SplatImage};
 
 /// A renderer on the test machine's adapter (lavapipe in CI). Validation errors panic (wgpu's
 /// default uncaptured-error handler), so any invalid GPU use fails the test.
@@ -19,10 +19,15 @@ fn gpu() -> GpuContext {
 /// 4 pixels per thread up to four channels, 1 above, skipping Gaussians that miss a block of
 /// threads, with and without subgroup shuffles), so each is tested whatever the adapter.
 pub fn renderers() -> Vec<HeadlessRenderer> {
+    renderers_storing(FeatureStorage::F32)
+}
+
+/// The same, with features stored as `storage`.
+pub fn renderers_storing(storage: FeatureStorage) -> Vec<HeadlessRenderer> {
     cpu_tunings()
         .into_iter()
         .chain([RasterTuning::Lockstep(1)])
-        .map(|t| HeadlessRenderer::with_tuning(gpu(), t))
+        .map(|t| HeadlessRenderer::with_options(gpu(), t, storage))
         .collect()
 }
 

@@ -296,7 +296,8 @@ impl GuavaApp {
 
     /// Shows a loaded cloud, unless it is empty or too big for the GPU: then the current scene stays.
     fn accept_cloud(&mut self, path: &Path, cloud: GaussianCloud) {
-        let max = max_gaussians(&self.gpu.limits, cloud.channels as u32);
+        let storage = guava::render::FeatureStorage::F32;
+        let max = max_gaussians(&self.gpu.limits, cloud.channels as u32, storage);
         if cloud.is_empty() {
             self.error(format!("{}: the file has no Gaussians", path.display()));
         } else if cloud.len() as u64 > max {

@@ -64,7 +64,7 @@ fn parse(text: &str) -> Result<Vec<Setting>, String> {
             .ok_or(format!("no column {name:?}"))
     };
     let (total, psnr, pareto) = (column("total_ms")?, column("psnr_db")?, column("pareto")?);
-    let labels: Vec<usize> = ["uv", "gaussians", "side", "refiner"]
+    let labels: Vec<usize> = ["uv", "gaussians", "features", "side", "refiner"]
         .iter()
         .filter_map(|n| column(n).ok())
         .collect();

@@ -4,10 +4,11 @@
 
 use super::Splatter;
 use crate::camera::Camera;
+use crate::render::FeatureStorage;
 use crate::render::layout::{GpuGaussian, PROJECTED_SIZE};
 use crate::render::scan::{PrefixScan, entry};
 use crate::render::sort::{RadixSort, SortBuffers};
-use crate::render::splatter::{array_view, feature_stride};
+use crate::render::splatter::{array_view, feature_bytes};
 
 /// Per-Gaussian buffers, sized by capacity.
 pub(super) struct CloudBuffers {
@@ -88,7 +89,12 @@ pub(super) fn output_texture(
 }
 
 impl Splatter {
-    pub(super) fn alloc_cloud(device: &wgpu::Device, capacity: u32, channels: u32) -> CloudBuffers {
+    pub(super) fn alloc_cloud(
+        device: &wgpu::Device,
+        capacity: u32,
+        channels: u32,
+        features_as: FeatureStorage,
+    ) -> CloudBuffers {
         let n = capacity as u64;
         CloudBuffers {
             capacity,
@@ -101,7 +107,7 @@ impl Splatter {
             features: storage(
                 device,
                 "Splat::features",
-                n * feature_stride(channels) as u64 * 4,
+                n * feature_bytes(channels, features_as),
             ),
             projected: storage(device, "Splat::projected", n * PROJECTED_SIZE),
             depth_keys: storage(device, "Splat::depth_keys", n * 4),

@@ -10,7 +10,7 @@
 mod buffers;
 
 use super::layout::{FrameUniform, GpuGaussian, PROJECTED_SIZE};
-use super::pipelines::{SplatPipelines, dispatch_1d};
+use super::pipelines::{FeatureStorage, SplatPipelines, dispatch_1d};
 use super::readback::{read_buffers, read_texture_layers};
 use super::timing::StageTimer;
 use super::{RenderStats, SplatError, SplatImage};
@@ -79,12 +79,18 @@ pub fn feature_stride(channels: u32) -> u32 {
     channels.div_ceil(4) * 4
 }
 
-/// The largest cloud with `channels` channels whose buffers the device can bind.
-pub fn max_gaussians(limits: &wgpu::Limits, channels: u32) -> u64 {
+/// Bytes of one Gaussian's features in the GPU feature buffer.
+pub fn feature_bytes(channels: u32, storage: FeatureStorage) -> u64 {
+    feature_stride(channels) as u64 * storage.channel_bytes()
+}
+
+/// The largest cloud with `channels` channels stored as `storage` whose buffers the device can
+/// bind.
+pub fn max_gaussians(limits: &wgpu::Limits, channels: u32, storage: FeatureStorage) -> u64 {
     let max_binding = limits
         .max_storage_buffer_binding_size
         .min(limits.max_buffer_size);
-    let per_gaussian = (feature_stride(channels) as u64 * 4).max(size_of::<GpuGaussian>() as u64);
+    let per_gaussian = feature_bytes(channels, storage).max(size_of::<GpuGaussian>() as u64);
     (max_binding / per_gaussian).min(u32::MAX as u64)
 }
 
@@ -170,7 +176,7 @@ impl Splatter {
         count: usize,
         channels: u32,
     ) -> Result<(), SplatError> {
-        let max_count = max_gaussians(&device.limits(), channels);
+        let max_count = max_gaussians(&device.limits(), channels, self.pipes.storage);
         if count as u64 > max_count {
             return Err(SplatError::TooManyGaussians {
                 count: count as u64,
@@ -187,7 +193,12 @@ impl Splatter {
             let capacity = (n as u64 + n as u64 / 4)
                 .clamp(MIN_GAUSSIANS as u64, max_count.max(MIN_GAUSSIANS as u64))
                 as u32;
-            self.cloud = Some(Self::alloc_cloud(device, capacity, channels));
+            self.cloud = Some(Self::alloc_cloud(
+                device,
+                capacity,
+                channels,
+                self.pipes.storage,
+            ));
             self.bindings = None;
             self.buffers_generation += 1;
         }
@@ -202,17 +213,33 @@ impl Splatter {
         let Some(buffers) = &self.cloud else { return };
         let c = buffers.channels as usize;
         let stride = feature_stride(buffers.channels) as usize;
-        if c == stride {
-            queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(features));
-        } else {
-            let mut padded = vec![0.0f32; features.len() / c * stride];
-            for (to, from) in padded
-                .chunks_exact_mut(stride)
-                .zip(features.chunks_exact(c))
-            {
-                to[..c].copy_from_slice(from);
+        match self.pipes.storage {
+            FeatureStorage::F32 if c == stride => {
+                queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(features));
             }
-            queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(&padded));
+            FeatureStorage::F32 => {
+                let mut padded = vec![0.0f32; features.len() / c * stride];
+                for (to, from) in padded
+                    .chunks_exact_mut(stride)
+                    .zip(features.chunks_exact(c))
+                {
+                    to[..c].copy_from_slice(from);
+                }
+                queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(&padded));
+            }
+            FeatureStorage::F16 => {
+                // Round to nearest; beyond f16's range becomes ±Inf (culled as non-finite).
+                let mut padded = vec![0u16; features.len() / c * stride];
+                for (to, from) in padded
+                    .chunks_exact_mut(stride)
+                    .zip(features.chunks_exact(c))
+                {
+                    for (t, f) in to.iter_mut().zip(from) {
+                        *t = half::f16::from_f32(*f).to_bits();
+                    }
+                }
+                queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(&padded));
+            }
         }
     }
 
@@ -434,7 +461,7 @@ impl Splatter {
     pub fn memory(&self) -> MemoryUse {
         let per_gaussian = |c: &CloudBuffers| {
             size_of::<GpuGaussian>() as u64
-                + feature_stride(c.channels) as u64 * 4
+                + feature_bytes(c.channels, self.pipes.storage)
                 + PROJECTED_SIZE
                 + 6 * 4
         };

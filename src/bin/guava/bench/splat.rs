@@ -13,7 +13,7 @@ use guava::gaussians::synthetic::BallCloud;
 use guava::gpu::GpuContext;
 use guava::render::StageTimer;
 use guava::render::wait;
-use guava::render::{HeadlessRenderer, Stage};
+use guava::render::{FeatureStorage, HeadlessRenderer, Stage};
 
 use super::median;
 use std::time::Instant;
@@ -35,17 +35,27 @@ pub struct SplatBenchArgs {
     /// Also write each configuration's cloud as PLY here (to time a peer renderer on the same data).
     #[arg(long)]
     pub write_ply: Option<std::path::PathBuf>,
+    /// Store the features as f16 (half their memory and bandwidth).
+    #[arg(long)]
+    pub f16: bool,
 }
 
 pub fn splat(args: &SplatBenchArgs) -> anyhow::Result<()> {
-    let mut renderer = HeadlessRenderer::new(GpuContext::headless()?);
+    let storage = match args.f16 {
+        true => FeatureStorage::F16,
+        false => FeatureStorage::F32,
+    };
+    let mut renderer = HeadlessRenderer::with_storage(GpuContext::headless()?, storage);
     // A CPU adapter's timestamps misplace the work (on lavapipe the preprocess of 150k Gaussians
     // read 0.05 ms, its time landing in later stages), so there each stage is timed on its own.
     let timer = match renderer.gpu.adapter.get_info().device_type {
         wgpu::DeviceType::Cpu => None,
         _ => StageTimer::new(&renderer.gpu.device, &renderer.gpu.queue),
     };
-    println!("adapter: {}", renderer.gpu.adapter_label());
+    println!(
+        "adapter: {}; features stored as {storage:?}",
+        renderer.gpu.adapter_label()
+    );
     println!(
         "stage times: {}; frame: CPU wall time of a whole submitted frame; medians of {} frames",
         if timer.is_some() {

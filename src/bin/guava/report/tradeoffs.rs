@@ -1,7 +1,8 @@
 //! Error against run time: the avatar drawn with each combination of the knobs that trade one
 //! for the other — the UV map's side (reconstructed again for each), which Gaussians (all;
 //! template only; UV only; UV Gaussians pruned below an opacity; the coarse stand-in the viewer
-//! draws while interacting), the output side, the refiner on or off — timed pose → pixels and
+//! draws while interacting), the features stored as f32 or f16 (all Gaussians, default UV side),
+//! the output side, the refiner on or off — timed pose → pixels and
 //! compared with the subject's ground truth; at the smallest side the splatting pass is also
 //! checked against the f64 reference on the same Gaussians (the pass's own error).
 
@@ -9,10 +10,11 @@ use anyhow::Result;
 use guava::avatar::{Avatar, LocalGaussians, Rig, UvGaussians};
 use guava::body::{BodyPose, PosedBody};
 use guava::gaussians::GaussianCloud;
+use guava::gpu::GpuContext;
 use guava::onnx::OnnxRuntime;
 use guava::refine::pairs::{self, Pair, View};
 use guava::refine::{DEFAULT_REFINER, Refiner};
-use guava::render::{GpuAvatar, HeadlessRenderer, reference};
+use guava::render::{FeatureStorage, GpuAvatar, HeadlessRenderer, reference};
 use guava::synthetic::{Subject, subject_texture};
 
 use super::{Table, time_ms};
@@ -115,6 +117,7 @@ pub fn run(
             "uv",
             "reconstruct_ms",
             "gaussians",
+            "features",
             "count",
             "side",
             "refiner",
@@ -131,12 +134,20 @@ pub fn run(
         rows: Vec::new(),
     };
     let mut points = Vec::new();
+    // All Gaussians at the default UV side also with their features stored as f16.
+    let mut halves = HeadlessRenderer::with_storage(GpuContext::headless()?, FeatureStorage::F16);
     let runs = candidates.iter().enumerate().flat_map(|(k, c)| {
         let contents = if k == 0 { CONTENTS.len() } else { 1 };
-        (0..contents).map(move |which| (c, which))
+        let f32_runs = (0..contents).map(move |which| (c, which, FeatureStorage::F32));
+        f32_runs.chain((k == 0).then_some((c, 0, FeatureStorage::F16)))
     });
-    for (candidate, which) in runs {
+    for (candidate, which, storage) in runs {
+        let renderer = match storage {
+            FeatureStorage::F32 => &mut *renderer,
+            FeatureStorage::F16 => &mut halves,
+        };
         let name = CONTENTS[which];
+        let features = format!("{storage:?}").to_lowercase();
         let shown = variant(&candidate.avatar, which);
         // The splatting pass's own error at the smallest side: the same Gaussians (rigged once,
         // on the CPU) through the pass and through the f64 reference. (Against the GPU-rigged
@@ -196,7 +207,7 @@ pub fn run(
                 let total = frame_ms + refine_ms;
                 points.push(Point {
                     label: format!(
-                        "UV {}², {name}, {side}², {}",
+                        "UV {}², {name}, {features}, {side}², {}",
                         candidate.uv,
                         if refine { "refined" } else { "raw" }
                     ),
@@ -208,6 +219,7 @@ pub fn run(
                     candidate.uv.to_string(),
                     format!("{:.0}", candidate.reconstruct_ms),
                     name.to_string(),
+                    features.clone(),
                     shown.len().to_string(),
                     side.to_string(),
                     if refine { "on" } else { "off" }.into(),
@@ -242,8 +254,9 @@ pub fn run(
          eval` measures). vs_f64: the splatting pass against the f64 reference on the same \
          Gaussians at {}² (max absolute difference over every channel and alpha; PSNR of the \
          channels). uv: the UV map's side the avatar was reconstructed at (reconstruct_ms: how long \
-         that took, photo → avatar). frame_ms: posing on the GPU and splatting, without reading \
-         back; refine_ms: the default refiner through ONNX Runtime on the CPU.",
+         that took, photo → avatar). features: how the splatting pass stores each Gaussian's \
+         channels (f16: half their memory). frame_ms: posing on the GPU and splatting, without \
+         reading back; refine_ms: the default refiner through ONNX Runtime on the CPU.",
         sides[0]
     );
     Ok(Tradeoffs {
