@@ -361,6 +361,11 @@ impl GuavaApp {
         self.refined.frames
     }
 
+    /// Refines while the user drags or plays too (the latest refined frame stays on screen).
+    pub fn set_refine_while_interacting(&mut self, on: bool) {
+        self.refined.while_interacting = on;
+    }
+
     /// Shows the avatar's photo beside it in the viewport (where it was made here).
     pub fn set_photo_beside(&mut self, beside: bool) {
         self.display_photo_beside = beside;

@@ -2,7 +2,9 @@
 //! drawn again off screen at the viewport's size, refined by its refiner (the default one, or
 //! GUAVA's for GUAVA-mode avatars; ONNX Runtime on the CPU, a worker thread) and drawn over the
 //! raw splat image until anything changes.
-//! While the user drags or plays the raw splat is shown: the refiner is left out of those frames.
+//! While the user drags or plays the raw splat is shown: the refiner is left out of those frames
+//! — unless refining *while interacting* too, when the latest refined frame stays on screen
+//! (behind the input by the refiner's time) and the next is made as soon as the worker is free.
 
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::sync::{Arc, Mutex};
@@ -37,6 +39,8 @@ struct Refined {
 pub struct RefinedView {
     /// Whether the refiner runs when the view settles (the user's switch).
     pub enabled: bool,
+    /// Whether it also runs while the user drags or plays, showing its latest frame meanwhile.
+    pub while_interacting: bool,
     refiner: Arc<Mutex<Option<Refiner>>>,
     pending: Option<(RefineKey, Receiver<Result<Refined, String>>)>,
     shown: Option<(RefineKey, egui::TextureHandle)>,
@@ -47,14 +51,17 @@ pub struct RefinedView {
     pub unavailable: Option<String>,
     /// Refined frames shown so far.
     pub frames: u64,
-    /// Whether the frame on screen is the refined one.
+    /// Whether the frame on screen is the refined one, and whether it is behind the view (an
+    /// earlier frame's, while interacting).
     pub showing: bool,
+    pub behind: bool,
 }
 
 impl Default for RefinedView {
     fn default() -> Self {
         Self {
             enabled: true,
+            while_interacting: false,
             refiner: Arc::default(),
             pending: None,
             shown: None,
@@ -63,13 +70,16 @@ impl Default for RefinedView {
             unavailable: None,
             frames: 0,
             showing: false,
+            behind: false,
         }
     }
 }
 
 impl RefinedView {
     /// The refined frame for `key` if it is ready; otherwise starts making it (one at a time) and
-    /// returns `None`, so the caller draws the raw splat image meanwhile.
+    /// returns `None`, so the caller draws the raw splat image meanwhile — or, with `behind`, the
+    /// latest refined frame of an earlier key (interacting: the view moves on faster than the
+    /// refiner).
     pub fn frame(
         &mut self,
         ctx: &egui::Context,
@@ -77,26 +87,34 @@ impl RefinedView {
         offscreen: &Arc<Mutex<OffscreenRenderer>>,
         avatar: &AvatarRef,
         pose: &PoseRef,
+        behind: bool,
     ) -> Option<egui::TextureId> {
+        self.behind = false;
         if let Some((k, texture)) = &self.shown
             && *k == key
         {
             return Some(texture.id());
         }
+        let latest = |view: &mut Self| {
+            view.behind = behind && view.shown.is_some();
+            view.shown.as_ref().filter(|_| behind).map(|(_, t)| t.id())
+        };
         if let Some((k, rx)) = &self.pending {
             match rx.try_recv() {
                 Err(TryRecvError::Empty) => {
                     ctx.request_repaint_after(std::time::Duration::from_millis(50));
-                    return None;
+                    return latest(self);
                 }
-                Ok(Ok(refined)) if *k == key => {
+                Ok(Ok(refined)) if *k == key || behind => {
                     let texture =
                         ctx.load_texture("refined view", refined.image, Default::default());
                     self.last_ms = Some(refined.millis);
                     self.frames += 1;
-                    self.shown = Some((key, texture));
+                    self.shown = Some((k.clone(), texture));
                     self.pending = None;
-                    return self.shown.as_ref().map(|(_, t)| t.id());
+                    if *self.shown.as_ref().map(|(k, _)| k).expect("just set") == key {
+                        return self.shown.as_ref().map(|(_, t)| t.id());
+                    }
                 }
                 Ok(Err(e)) => {
                     self.error = Some(e);
@@ -118,7 +136,7 @@ impl RefinedView {
             ctx.request_repaint();
         });
         self.pending = Some((key, rx));
-        None
+        latest(self)
     }
 }
 

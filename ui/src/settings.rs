@@ -16,6 +16,7 @@ pub const RECENT: usize = 8;
 pub struct Settings {
     background: [f32; 3],
     refine: bool,
+    refine_while_interacting: bool,
     interactive_scale: Option<f32>,
     fov_deg: f32,
     export_size: [u32; 2],
@@ -31,6 +32,7 @@ impl Default for Settings {
         Self {
             background: [0.0; 3],
             refine: true,
+            refine_while_interacting: false,
             interactive_scale: None,
             fov_deg: 50.0,
             export_size: [1024, 1024],
@@ -53,6 +55,7 @@ impl Settings {
         let settings = Self {
             background: app.background,
             refine: app.refined.enabled,
+            refine_while_interacting: app.refined.while_interacting,
             interactive_scale: Some(app.interaction.scale),
             fov_deg: app.orbit.fov_y_rad.to_degrees(),
             export_size: [e.width, e.height],
@@ -71,6 +74,7 @@ impl Settings {
             app.background = self.background;
         }
         app.refined.enabled = self.refine;
+        app.refined.while_interacting = self.refine_while_interacting;
         if let Some(s) = self.interactive_scale.filter(|s| *s > 0.0 && *s <= 1.0) {
             app.interaction.scale = s;
         }

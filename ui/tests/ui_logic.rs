@@ -1205,3 +1205,36 @@ fn a_keyed_camera_path_is_flown_by_the_export() {
     assert!(differ(&keyed(4), &fixed_back(4)) > 2.0, "turned between");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Refining while interacting too: during a long drag refined frames keep coming (made for
+/// views the drag has already left), the HUD says the one on screen is an earlier frame's, and
+/// once the view settles it is refined for where it stopped.
+#[test]
+fn refining_while_interacting_shows_the_latest_refined_frame() {
+    let mut h = synthetic_avatar();
+    wait_until(&mut h, |app| app.refined_frames() > 0);
+    h.state_mut().set_refine_while_interacting(true);
+    let before = h.state().refined_frames();
+    let at = egui::pos2(900.0, 350.0);
+    h.hover_at(at);
+    h.drag_at(at);
+    let start = Instant::now();
+    let mut dx = 0.0;
+    while h.state().refined_frames() < before + 2 && start.elapsed() < Duration::from_secs(60) {
+        dx += 2.0;
+        h.hover_at(at + egui::vec2(dx, 0.0));
+        frame(&mut h);
+    }
+    assert!(
+        h.state().refined_frames() >= before + 2,
+        "refined frames while dragging"
+    );
+    h.get_by_label("refined (an earlier frame)");
+    h.drop_at(at + egui::vec2(dx, 0.0));
+    let dragged = h.state().refined_frames();
+    wait_until(&mut h, |app| app.refined_frames() > dragged);
+    for _ in 0..3 {
+        frame(&mut h);
+    }
+    h.get_by_label("refined");
+}

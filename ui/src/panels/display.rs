@@ -55,6 +55,18 @@ impl GuavaApp {
                  subjects, for default reconstructions; GUAVA's, from its networks folder, for \
                  GUAVA-mode avatars); the raw splat image is shown meanwhile",
             );
+        ui.add_enabled(
+            self.refined.enabled,
+            egui::Checkbox::new(
+                &mut self.refined.while_interacting,
+                "…and while interacting",
+            ),
+        )
+        .on_hover_text(
+            "while you drag or play, the latest refined frame stays on screen (behind the view \
+             by the refiner's time) and the next is made as soon as the last is done, instead \
+             of the raw splat image",
+        );
         ui.checkbox(
             &mut self.display_photo_beside,
             "the photo beside the avatar",
@@ -142,10 +154,10 @@ impl GuavaApp {
                 }
                 row(
                     "on screen",
-                    if self.refined.showing {
-                        "refined"
-                    } else {
-                        "raw splat"
+                    match (self.refined.showing, self.refined.behind) {
+                        (true, false) => "refined",
+                        (true, true) => "refined (an earlier frame)",
+                        (false, _) => "raw splat",
                     }
                     .into(),
                 );

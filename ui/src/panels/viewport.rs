@@ -145,8 +145,9 @@ impl GuavaApp {
                 usable(Shown::of_display(&self.display, self.refined.enabled)),
             )],
         };
-        let refined = match panes.iter().any(|(_, s)| *s == Shown::Refined) && !interacting {
-            true => self.refined_frame(ui.ctx(), &content, camera),
+        let refine_now = !interacting || self.refined.while_interacting;
+        let refined = match panes.iter().any(|(_, s)| *s == Shown::Refined) && refine_now {
+            true => self.refined_frame(ui.ctx(), &content, camera, interacting),
             false => None,
         };
         self.refined.showing = refined.is_some();
@@ -293,6 +294,7 @@ impl GuavaApp {
         ctx: &egui::Context,
         content: &Content,
         camera: guava::camera::Camera,
+        interacting: bool,
     ) -> Option<egui::TextureId> {
         self.refined.unavailable = None;
         let Content::Avatar {
@@ -325,7 +327,8 @@ impl GuavaApp {
             background: self.background,
             outside: *outside,
         };
-        self.refined.frame(ctx, key, offscreen, avatar, pose)
+        self.refined
+            .frame(ctx, key, offscreen, avatar, pose, interacting)
     }
 
     fn empty_state_ui(&mut self, ui: &mut egui::Ui, rect: egui::Rect) {
