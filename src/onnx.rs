@@ -136,12 +136,46 @@ impl OnnxRuntime {
         }
         let inner = ort::session::Session::builder(&self.env)
             .map_err(model_err)?
+            .with_execution_providers(execution_providers())
+            .map_err(|e| model_err(e.into()))?
             .commit_from_file(path)
             .map_err(model_err)?;
         Ok(Session {
             inner,
             path: path.to_path_buf(),
         })
+    }
+}
+
+/// The GPU execution providers this build asks for, in order (cargo features `cuda`, `directml`,
+/// `coreml`; none by default): each that the loaded library cannot register is skipped and the
+/// session runs on the CPU (checked with `cuda` against the CPU build: the same images).
+fn execution_providers() -> Vec<ort::ep::ExecutionProviderDispatch> {
+    vec![
+        #[cfg(feature = "cuda")]
+        ort::ep::CUDA::default().build(),
+        #[cfg(feature = "directml")]
+        ort::ep::DirectML::default().build(),
+        #[cfg(feature = "coreml")]
+        ort::ep::CoreML::default().build(),
+    ]
+}
+
+/// The GPU execution providers this build asks for, by name.
+pub fn requested_providers() -> String {
+    let built = [
+        (cfg!(feature = "cuda"), "CUDA"),
+        (cfg!(feature = "directml"), "DirectML"),
+        (cfg!(feature = "coreml"), "CoreML"),
+    ];
+    let names: Vec<&str> = built
+        .iter()
+        .filter(|(on, _)| *on)
+        .map(|(_, n)| *n)
+        .collect();
+    match names.is_empty() {
+        true => "none (the CPU only; cargo features cuda, directml, coreml)".into(),
+        false => names.join(", "),
     }
 }
 

@@ -390,5 +390,9 @@ fn info() -> Result<()> {
         ),
         Err(e) => println!("onnxruntime: not available: {e}"),
     }
+    println!(
+        "onnxruntime GPU providers asked for: {}",
+        guava::onnx::requested_providers()
+    );
     Ok(())
 }
