@@ -386,6 +386,10 @@ impl GuavaApp {
         self.views.compare = compare;
     }
 
+    pub fn compare(&self) -> Option<crate::compare::Compare> {
+        self.views.compare
+    }
+
     /// The body's mesh over the avatar at an opacity (`None`: off).
     pub fn set_mesh_over(&mut self, opacity: Option<f32>) {
         self.views.mesh_over = opacity;

@@ -1092,6 +1092,36 @@ fn a_split_shows_two_views_of_one_splat() {
     }));
     let img = pixels(&mut h, 3);
     assert_eq!(count(&img, right, coloured), 0, "the split moved right");
+
+    // Dragging the split's line moves it (and does not orbit).
+    h.state_mut().set_compare(Some(Compare {
+        left: Shown::Alpha,
+        right: Shown::Raw,
+        at: 0.5,
+    }));
+    let img = pixels(&mut h, 3);
+    // The line: the one light column below the avatar (black background there).
+    let y = 550;
+    let x = (420..1090)
+        .find(|&x| img.get_pixel(x, y).0[..3].iter().all(|c| *c > 120))
+        .expect("the split's line");
+    let renders = h.state().report().renders;
+    let from = egui::pos2(x as f32 + 0.5, 500.0);
+    h.hover_at(from);
+    h.drag_at(from);
+    for dx in [20.0, 60.0, 100.0] {
+        h.hover_at(from + egui::vec2(dx, 0.0));
+        frame(&mut h);
+    }
+    h.drop_at(from + egui::vec2(100.0, 0.0));
+    frame(&mut h);
+    let at = h.state().compare().expect("compare").at;
+    assert!(at > 0.6 && at < 0.8, "the split at {at}");
+    assert_eq!(
+        h.state().report().renders,
+        renders,
+        "the drag moved the split: no camera move, no interactive resolution, no splatting"
+    );
 }
 
 /// The photo in a split lines up with the avatar through the photo's camera: its person's

@@ -102,7 +102,9 @@ impl GuavaApp {
             _ => return,
         };
         let playing = self.motion.as_ref().is_some_and(|m| m.is_playing());
-        let pressed = ui.ctx().input(|i| i.pointer.any_down());
+        // Dragging the split's line moves no content: not interaction.
+        let splitting = ui.ctx().is_being_dragged(Self::split_id(ui));
+        let pressed = ui.ctx().input(|i| i.pointer.any_down()) && !splitting;
         let interacting = moved || pressed || playing;
         self.interaction.active = interacting && self.interaction.scale < 1.0;
         if self.interaction.active {
@@ -250,11 +252,7 @@ impl GuavaApp {
         }
         let handle = egui::Rect::from_x_y_ranges(x - 5.0..=x + 5.0, rect.y_range());
         let response = ui
-            .interact(
-                handle,
-                ui.make_persistent_id("viewport_split"),
-                egui::Sense::drag(),
-            )
+            .interact(handle, Self::split_id(ui), egui::Sense::drag())
             .on_hover_cursor(egui::CursorIcon::ResizeHorizontal);
         if let (Some(p), true, Some(c)) = (
             response.interact_pointer_pos(),
@@ -263,6 +261,10 @@ impl GuavaApp {
         ) {
             c.at = ((p.x - rect.left()) / rect.width()).clamp(0.0, 1.0);
         }
+    }
+
+    fn split_id(ui: &egui::Ui) -> egui::Id {
+        ui.make_persistent_id("viewport_split")
     }
 
     /// On the demo portrait's avatar (the first launch), how to make one's own.
