@@ -63,7 +63,9 @@ pub fn device_descriptor(adapter: &wgpu::Adapter) -> wgpu::DeviceDescriptor<'sta
     }
 }
 
-/// A headless device and queue, plus what `guava info` reports about them.
+/// A headless device and queue, plus what `guava info` reports about them. Clones share the
+/// device.
+#[derive(Clone)]
 pub struct GpuContext {
     pub adapter: wgpu::Adapter,
     pub device: wgpu::Device,

@@ -44,8 +44,8 @@ pub fn write_mp4(frames: &[PathBuf], fps: f32, out: &Path) -> anyhow::Result<()>
         Encoder, EncoderConfig, FrameRate, FrameType, IntraFramePeriod, QpRange, RateControlMode,
     };
     use openh264::formats::{RgbSliceU8, YUVBuffer};
-    let first = frames.first().context("no frames to write")?;
-    let (w, h) = read_frame(first)?.to_rgb8().dimensions();
+    let first = read_frame(frames.first().context("no frames to write")?)?.to_rgb8();
+    let (w, h) = first.dimensions();
     let (w, h) = (w & !1, h & !1);
     anyhow::ensure!(w >= 16 && h >= 16, "{w}×{h} is too small for a video");
     anyhow::ensure!(fps > 0.0 && fps.is_finite(), "frame rate {fps}");
@@ -65,10 +65,14 @@ pub fn write_mp4(frames: &[PathBuf], fps: f32, out: &Path) -> anyhow::Result<()>
     let duration = (TIMESCALE as f32 / fps).round() as u32;
     crate::atomic_file::write_atomic(out, |file| {
         let io = |e: String| std::io::Error::other(e);
-        let mut mp4 = None;
+        let (mut mp4, mut first) = (None, Some(first));
         for (i, path) in frames.iter().enumerate() {
-            let rgb =
-                image::imageops::crop_imm(&read_frame(path)?.to_rgb8(), 0, 0, w, h).to_image();
+            // The first frame was read for the size already.
+            let full = match first.take() {
+                Some(image) => image,
+                None => read_frame(path)?.to_rgb8(),
+            };
+            let rgb = image::imageops::crop_imm(&full, 0, 0, w, h).to_image();
             if rgb.dimensions() != (w, h) {
                 return Err(io(format!(
                     "{}: not {w}×{h} like the first frame",

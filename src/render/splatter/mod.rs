@@ -84,6 +84,25 @@ pub fn feature_bytes(channels: u32, storage: FeatureStorage) -> u64 {
     feature_stride(channels) as u64 * storage.channel_bytes()
 }
 
+/// `features` (`channels` a Gaussian) zero-padded to `stride` a Gaussian, each value `to`'s.
+fn padded<T: bytemuck::Pod + Default>(
+    features: &[f32],
+    channels: usize,
+    stride: usize,
+    to: impl Fn(f32) -> T,
+) -> Vec<T> {
+    let mut out = vec![T::default(); features.len() / channels * stride];
+    for (o, f) in out
+        .chunks_exact_mut(stride)
+        .zip(features.chunks_exact(channels))
+    {
+        for (t, v) in o.iter_mut().zip(f) {
+            *t = to(*v);
+        }
+    }
+    out
+}
+
 /// The largest cloud with `channels` channels stored as `storage` whose buffers the device can
 /// bind.
 pub fn max_gaussians(limits: &wgpu::Limits, channels: u32, storage: FeatureStorage) -> u64 {
@@ -213,33 +232,14 @@ impl Splatter {
         let Some(buffers) = &self.cloud else { return };
         let c = buffers.channels as usize;
         let stride = feature_stride(buffers.channels) as usize;
+        let write = |bytes: &[u8]| queue.write_buffer(&buffers.features, 0, bytes);
         match self.pipes.storage {
-            FeatureStorage::F32 if c == stride => {
-                queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(features));
-            }
-            FeatureStorage::F32 => {
-                let mut padded = vec![0.0f32; features.len() / c * stride];
-                for (to, from) in padded
-                    .chunks_exact_mut(stride)
-                    .zip(features.chunks_exact(c))
-                {
-                    to[..c].copy_from_slice(from);
-                }
-                queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(&padded));
-            }
-            FeatureStorage::F16 => {
-                // Round to nearest; beyond f16's range becomes ±Inf (culled as non-finite).
-                let mut padded = vec![0u16; features.len() / c * stride];
-                for (to, from) in padded
-                    .chunks_exact_mut(stride)
-                    .zip(features.chunks_exact(c))
-                {
-                    for (t, f) in to.iter_mut().zip(from) {
-                        *t = half::f16::from_f32(*f).to_bits();
-                    }
-                }
-                queue.write_buffer(&buffers.features, 0, bytemuck::cast_slice(&padded));
-            }
+            FeatureStorage::F32 if c == stride => write(bytemuck::cast_slice(features)),
+            FeatureStorage::F32 => write(bytemuck::cast_slice(&padded(features, c, stride, |v| v))),
+            // Round to nearest; beyond f16's range becomes ±Inf (culled as non-finite).
+            FeatureStorage::F16 => write(bytemuck::cast_slice(&padded(features, c, stride, |v| {
+                half::f16::from_f32(v).to_bits()
+            }))),
         }
     }
 

@@ -10,7 +10,6 @@ use anyhow::Result;
 use guava::avatar::{Avatar, LocalGaussians, Rig, UvGaussians};
 use guava::body::{BodyPose, PosedBody};
 use guava::gaussians::GaussianCloud;
-use guava::gpu::GpuContext;
 use guava::onnx::OnnxRuntime;
 use guava::refine::pairs::{self, Pair, View};
 use guava::refine::{DEFAULT_REFINER, Refiner};
@@ -134,8 +133,13 @@ pub fn run(
         rows: Vec::new(),
     };
     let mut points = Vec::new();
-    // All Gaussians at the default UV side also with their features stored as f16.
-    let mut halves = HeadlessRenderer::with_storage(GpuContext::headless()?, FeatureStorage::F16);
+    // All Gaussians at the default UV side also with their features stored as f16 (on the
+    // same device).
+    let mut halves = HeadlessRenderer::with_options(
+        renderer.gpu.clone(),
+        renderer.pipelines.tuning,
+        FeatureStorage::F16,
+    );
     let runs = candidates.iter().enumerate().flat_map(|(k, c)| {
         let contents = if k == 0 { CONTENTS.len() } else { 1 };
         let f32_runs = (0..contents).map(move |which| (c, which, FeatureStorage::F32));
