@@ -15,6 +15,7 @@ pub mod guava_mode;
 pub mod keypoints;
 pub mod npz;
 pub mod onnx;
+pub mod onnx_model;
 pub mod photo;
 pub mod pipeline;
 pub mod progress;

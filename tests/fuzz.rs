@@ -309,6 +309,20 @@ proptest! {
         let runtime = guava::onnx::OnnxRuntime::load().expect("ONNX Runtime");
         let _ = with_file(&bytes, "model.onnx", |p| guava::refine::Refiner::load(runtime, p));
     }
+
+    /// Our own reader and WGSL compiler take the same damaged files: an error, never a panic
+    /// or an invalid GPU call (wgpu's handler panics on those); what compiles also runs.
+    #[test]
+    fn refiner_models_for_the_wgsl_passes(
+        bytes in (0usize..2).prop_flat_map(|k| damaged(&seeds().onnx[k]))
+    ) {
+        let gpu = crate::common::shared_gpu();
+        if let Ok(mut refiner) =
+            with_file(&bytes, "model.onnx", |p| guava::refine::Refiner::load_wgsl(gpu, p))
+        {
+            let _ = refiner.refine(&guava::render::SplatImage::new(9, 7, 4));
+        }
+    }
 }
 
 /// Sizes a file claims but does not hold are refused before anything that size is allocated:

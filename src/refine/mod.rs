@@ -9,15 +9,20 @@
 //!   renders on a black background); the splat's alpha composites it. Other frame sizes are
 //!   letterboxed into its square and resampled (bilinear) there and back.
 //!
-//! Both run through ONNX Runtime on the CPU: the splat image is read back, refined and composited.
+//! Either runs through ONNX Runtime on the CPU (the splat image read back, refined and
+//! composited) or, where its operators allow, through our own compute passes on the splatting
+//! device ([`wgsl`]); [`RefinerOn`] chooses.
 
 pub mod pairs;
+pub mod wgsl;
 
 use std::path::{Path, PathBuf};
 
 use crate::avatar::AvatarKind;
+use crate::gpu::GpuContext;
 use crate::guava_mode::models::{REFINER_FILE, REFINER_ROLE};
 use crate::onnx::{OnnxError, OnnxRuntime, Session, TensorF32};
+use crate::onnx_model::Model;
 use crate::render::SplatImage;
 
 /// The default refiner, shipped in the repository.
@@ -60,31 +65,136 @@ pub enum RefinerKind {
     Guava { channels: usize, side: usize },
 }
 
+/// Where a refiner's network runs.
+enum Engine {
+    /// ONNX Runtime on the CPU (any model ONNX Runtime takes): the splat image is read back.
+    OnnxRuntime(Session),
+    /// Our own compute passes on a wgpu device ([`wgsl`]; the operators a small U-Net uses):
+    /// on the splatting device the splat layers are read where they lie.
+    Wgsl(Box<wgsl::WgslNetwork>),
+}
+
+/// Where the user wants the refiner to run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum RefinerOn {
+    /// Our WGSL passes on a hardware adapter, ONNX Runtime on a software one (lavapipe, where
+    /// `guava bench refiner` measured ONNX Runtime two orders of magnitude faster) or where the
+    /// model has an operator the passes do not run (GUAVA's StyleUNet).
+    #[default]
+    Auto,
+    /// ONNX Runtime on the CPU.
+    Cpu,
+    /// Our WGSL passes on the splatting device.
+    Gpu,
+}
+
+impl RefinerOn {
+    pub const ALL: [Self; 3] = [Self::Auto, Self::Cpu, Self::Gpu];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Cpu => "CPU (ONNX Runtime)",
+            Self::Gpu => "GPU (WGSL passes)",
+        }
+    }
+}
+
 /// A loaded refiner network.
 pub struct Refiner {
-    session: Session,
+    engine: Engine,
     pub kind: RefinerKind,
     pub path: PathBuf,
+    /// Where it was asked to run ([`Refiner::load_on`]; `Cpu` or `Gpu` by the other loaders).
+    pub on: RefinerOn,
     /// What the model file says it is, for the UI and reports.
     pub description: String,
 }
 
+/// What a model file declares: its input's and output's dims (-1 where free) and metadata.
+struct Signature {
+    input: Option<Vec<i64>>,
+    /// `OUTPUT`'s or `GUAVA_OUTPUT`'s dims, as the role says.
+    output: Option<Vec<i64>>,
+    role: Option<String>,
+    source: Option<String>,
+    description: Option<String>,
+}
+
 impl Refiner {
-    /// Loads and checks the model at `path`: GUAVA's if the exporter marked it so, else the
-    /// default kind.
+    /// Loads and checks the model at `path` where `on` says, the WGSL passes on `gpu`'s device.
+    /// `Auto` falls back to ONNX Runtime where the passes do not run the model.
+    pub fn load_on(on: RefinerOn, gpu: &GpuContext, path: &Path) -> Result<Self, RefineError> {
+        let software = gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
+        let mut refiner = match on {
+            RefinerOn::Cpu => Self::load(OnnxRuntime::load()?, path),
+            RefinerOn::Gpu => Self::load_wgsl(gpu, path),
+            RefinerOn::Auto if software => Self::load(OnnxRuntime::load()?, path),
+            RefinerOn::Auto => Self::load_wgsl(gpu, path).or_else(|e| {
+                log::info!("{e}; running it with ONNX Runtime instead");
+                Self::load(OnnxRuntime::load()?, path)
+            }),
+        }?;
+        refiner.on = on;
+        Ok(refiner)
+    }
+
+    /// Loads and checks the model at `path` for ONNX Runtime: GUAVA's if the exporter marked
+    /// it so, else the default kind.
     pub fn load(runtime: &OnnxRuntime, path: &Path) -> Result<Self, RefineError> {
         let session = runtime.session(path)?;
+        let shape = |shapes: Vec<(String, Vec<i64>)>, name: &str| {
+            shapes.into_iter().find(|(n, _)| n == name).map(|(_, s)| s)
+        };
+        let role = session.metadata("guava_rs.role");
+        let output_name = output_name(role.as_deref());
+        let signature = Signature {
+            input: shape(session.input_shapes(), INPUT),
+            output: shape(session.output_shapes(), output_name),
+            source: session.metadata("guava_rs.source"),
+            description: session.metadata("description"),
+            role,
+        };
+        Self::checked(Engine::OnnxRuntime(session), path, signature)
+    }
+
+    /// Loads and checks the model at `path` for our own compute passes on `gpu`'s device; an
+    /// operator they do not run is an error naming it (run that model with [`Refiner::load`]).
+    pub fn load_wgsl(gpu: &GpuContext, path: &Path) -> Result<Self, RefineError> {
         let problem = |problem: String| RefineError::Model {
             path: path.to_path_buf(),
             problem,
         };
-        let shape = |shapes: Vec<(String, Vec<i64>)>, name: &str| {
-            shapes.into_iter().find(|(n, _)| n == name).map(|(_, s)| s)
+        let model = Model::read(path).map_err(|e| problem(e.problem))?;
+        let dims = |name: &str| {
+            let info = model.value_info(name)?;
+            Some(info.dims.iter().map(|d| d.unwrap_or(-1)).collect())
         };
-        let input = shape(session.input_shapes(), INPUT);
-        let guava = session.metadata("guava_rs.role").as_deref() == Some(REFINER_ROLE);
-        let (kind, description) = if guava {
-            let output = shape(session.output_shapes(), GUAVA_OUTPUT);
+        let role = model.metadata.get("guava_rs.role").cloned();
+        let signature = Signature {
+            input: dims(INPUT),
+            output: dims(output_name(role.as_deref())),
+            source: model.metadata.get("guava_rs.source").cloned(),
+            description: model.metadata.get("description").cloned(),
+            role,
+        };
+        let network = wgsl::WgslNetwork::compile(gpu, &model).map_err(problem)?;
+        Self::checked(Engine::Wgsl(Box::new(network)), path, signature)
+    }
+
+    fn checked(engine: Engine, path: &Path, signature: Signature) -> Result<Self, RefineError> {
+        let problem = |problem: String| RefineError::Model {
+            path: path.to_path_buf(),
+            problem,
+        };
+        let Signature {
+            input,
+            output,
+            role,
+            source,
+            description,
+        } = signature;
+        let (kind, description) = if role.as_deref() == Some(REFINER_ROLE) {
             let kind = match (input.as_deref(), output.as_deref()) {
                 (Some(&[1, c, h, w]), Some(&[1, 3, oh, ow]))
                     if c >= 3 && h > 0 && h == w && (oh, ow) == (h, w) =>
@@ -96,17 +206,16 @@ impl Refiner {
                 }
                 (i, o) => {
                     return Err(problem(format!(
-                        "GUAVA's refiner should read `{INPUT}` [1, C, S, S] and give                          `{GUAVA_OUTPUT}` [1, 3, S, S] (fixed S); it declares {i:?} and {o:?}"
+                        "GUAVA's refiner should read `{INPUT}` [1, C, S, S] and give \
+                         `{GUAVA_OUTPUT}` [1, 3, S, S] (fixed S); it declares {i:?} and {o:?}"
                     )));
                 }
             };
-            let source = session
-                .metadata("guava_rs.source")
-                .unwrap_or_else(|| "unknown weights".into());
+            let source = source.unwrap_or_else(|| "unknown weights".into());
             (kind, format!("GUAVA's refiner ({source})"))
         } else {
-            let channels = |s: Option<Vec<i64>>| s.and_then(|s| s.get(1).copied());
-            match channels(input) {
+            let channels = |s: &Option<Vec<i64>>| s.as_ref().and_then(|s| s.get(1).copied());
+            match channels(&input) {
                 Some(c) if c == INPUT_CHANNELS as i64 => {}
                 other => {
                     return Err(problem(format!(
@@ -114,7 +223,7 @@ impl Refiner {
                     )));
                 }
             }
-            match channels(shape(session.output_shapes(), OUTPUT)) {
+            match channels(&output) {
                 Some(c) if c == OUTPUT_CHANNELS as i64 => {}
                 other => {
                     return Err(problem(format!(
@@ -122,17 +231,138 @@ impl Refiner {
                     )));
                 }
             }
-            let description = session
-                .metadata("description")
-                .unwrap_or_else(|| "refiner".into());
+            let description = description.unwrap_or_else(|| "refiner".into());
             (RefinerKind::Default, description)
         };
+        let on = match engine {
+            Engine::OnnxRuntime(_) => RefinerOn::Cpu,
+            Engine::Wgsl(_) => RefinerOn::Gpu,
+        };
         Ok(Self {
-            session,
+            engine,
             kind,
             path: path.to_path_buf(),
+            on,
             description,
         })
+    }
+
+    /// Where it runs, for the UI and reports.
+    pub fn engine_name(&self) -> &'static str {
+        match self.engine {
+            Engine::OnnxRuntime(_) => "ONNX Runtime (CPU)",
+            Engine::Wgsl(_) => "WGSL compute passes",
+        }
+    }
+
+    /// The network on `input` ([1, C, H, W]): its output, [1, `out_c`, H, W] flat (checked).
+    fn run(
+        &mut self,
+        input: Vec<f32>,
+        [c, h, w]: [usize; 3],
+        out_c: usize,
+    ) -> Result<Vec<f32>, RefineError> {
+        let out = self.run_unchecked(input, [c, h, w])?;
+        if out.len() != out_c * h * w {
+            return Err(RefineError::Model {
+                path: self.path.clone(),
+                problem: format!(
+                    "gives {} values for a [1, {c}, {h}, {w}] input, not [1, {out_c}, {h}, {w}]",
+                    out.len()
+                ),
+            });
+        }
+        Ok(out)
+    }
+
+    fn run_unchecked(
+        &mut self,
+        input: Vec<f32>,
+        [c, h, w]: [usize; 3],
+    ) -> Result<Vec<f32>, RefineError> {
+        match &mut self.engine {
+            Engine::OnnxRuntime(session) => {
+                let outputs = session.run(vec![(
+                    INPUT,
+                    TensorF32 {
+                        shape: vec![1, c, h, w],
+                        data: input,
+                    },
+                )])?;
+                Ok(outputs
+                    .into_iter()
+                    .next()
+                    .map(|t| t.data)
+                    .unwrap_or_default())
+            }
+            Engine::Wgsl(network) => network
+                .run_tensor(&input, h as u32, w as u32)
+                .map(|(out, _)| out)
+                .map_err(|problem| RefineError::Model {
+                    path: self.path.clone(),
+                    problem,
+                }),
+        }
+    }
+
+    /// The image `renderer` just drew (`HeadlessRenderer::draw`) refined. The WGSL engine on the
+    /// renderer's device gathers a default refiner's input from the splat layers where they lie
+    /// and reads back only its output; otherwise the splat image is read back and refined.
+    pub fn refine_drawn(
+        &mut self,
+        renderer: &crate::render::HeadlessRenderer,
+    ) -> Result<SplatImage, RefineError> {
+        let splatter = &renderer.splatter;
+        let on_device = match (&mut self.engine, self.kind) {
+            (Engine::Wgsl(network), RefinerKind::Default)
+                if network.device() == &renderer.gpu.device =>
+            {
+                splatter
+                    .features()
+                    .zip(splatter.aux())
+                    .map(|t| (network, t))
+            }
+            _ => None,
+        };
+        let Some((network, (features, aux))) = on_device else {
+            let image = splatter
+                .read_image(&renderer.gpu.device, &renderer.gpu.queue)
+                .unwrap_or_else(|| SplatImage::new(1, 1, 0));
+            return self.refine(&image);
+        };
+        let channels = features.size().depth_or_array_layers as usize;
+        if channels < 4 {
+            return Err(RefineError::Channels {
+                path: self.path.clone(),
+                wanted: DEFAULT_WANTS.into(),
+                channels,
+            });
+        }
+        let (width, height) = (features.width(), features.height());
+        let layers = [0, 1, 2, 3].map(wgsl::Layer::Feature);
+        let layers = [&layers[..], &[wgsl::Layer::Alpha]].concat();
+        let padded = [padded(width) as u32, padded(height) as u32];
+        let problem = |problem: String| RefineError::Model {
+            path: self.path.clone(),
+            problem,
+        };
+        let (out, c) = network
+            .run_splat(features, aux, &layers, [width, height], padded)
+            .map_err(problem)?;
+        if out.len() != OUTPUT_CHANNELS * (padded[0] * padded[1]) as usize {
+            return Err(problem(format!(
+                "gives [1, {c}, ..] for a {}×{} input, not [1, {OUTPUT_CHANNELS}, {}, {}]",
+                padded[0], padded[1], padded[1], padded[0]
+            )));
+        }
+        let mut refined = unpad_default(&out, width, height);
+        let mut aux = crate::render::readback::read_texture_layers(
+            &renderer.gpu.device,
+            &renderer.gpu.queue,
+            aux,
+        );
+        refined.inv_depth = aux.split_off(width as usize * height as usize);
+        Ok(refined)
     }
 
     /// `image` (rendered on black) refined: RGB premultiplied and alpha; its depth is kept.
@@ -144,9 +374,7 @@ impl Refiner {
         };
         let mut refined = match self.kind {
             RefinerKind::Default if image.channels < 4 => {
-                return Err(wrong(
-                    "RGB and the source-confidence channel (a default-mode avatar)".into(),
-                ));
+                return Err(wrong(DEFAULT_WANTS.into()));
             }
             RefinerKind::Guava { channels, .. } if image.channels != channels => {
                 return Err(wrong(format!(
@@ -178,26 +406,8 @@ impl Refiner {
                 input[at..at + w].copy_from_slice(row);
             }
         }
-        let outputs = self.session.run(vec![(
-            INPUT,
-            TensorF32 {
-                shape: vec![1, INPUT_CHANNELS, ph, pw],
-                data: input,
-            },
-        )])?;
-        let out = &outputs[0].data;
-        let mut refined = SplatImage::new(image.width, image.height, 3);
-        for c in 0..OUTPUT_CHANNELS {
-            let target = match c {
-                3 => &mut refined.alpha[..],
-                _ => &mut refined.features[c * w * h..(c + 1) * w * h],
-            };
-            for y in 0..h {
-                let at = (c * ph + y) * pw;
-                target[y * w..(y + 1) * w].copy_from_slice(&out[at..at + w]);
-            }
-        }
-        Ok(refined)
+        let out = self.run(input, [INPUT_CHANNELS, ph, pw], OUTPUT_CHANNELS)?;
+        Ok(unpad_default(&out, image.width, image.height))
     }
 
     fn refine_guava(&mut self, image: &SplatImage, side: usize) -> Result<SplatImage, RefineError> {
@@ -207,14 +417,7 @@ impl Refiner {
         for c in 0..image.channels {
             square.sample_square(image.plane(c), &mut input);
         }
-        let outputs = self.session.run(vec![(
-            INPUT,
-            TensorF32 {
-                shape: vec![1, image.channels, side, side],
-                data: input,
-            },
-        )])?;
-        let out = &outputs[0].data;
+        let out = self.run(input, [image.channels, side, side], 3)?;
         let mut refined = SplatImage::new(image.width, image.height, 3);
         refined.features.clear();
         for c in 0..3 {
@@ -225,6 +428,36 @@ impl Refiner {
         }
         refined.alpha.clone_from(&image.alpha);
         Ok(refined)
+    }
+}
+
+const DEFAULT_WANTS: &str = "RGB and the source-confidence channel (a default-mode avatar)";
+
+/// The default refiner's output ([4, padded H, padded W]) cropped to `width`×`height`: RGB
+/// and alpha.
+fn unpad_default(out: &[f32], width: u32, height: u32) -> SplatImage {
+    let (w, h) = (width as usize, height as usize);
+    let (pw, ph) = (padded(width), padded(height));
+    let mut refined = SplatImage::new(width, height, 3);
+    for c in 0..OUTPUT_CHANNELS {
+        let target = match c {
+            3 => &mut refined.alpha[..],
+            _ => &mut refined.features[c * w * h..(c + 1) * w * h],
+        };
+        for y in 0..h {
+            let at = (c * ph + y) * pw;
+            target[y * w..(y + 1) * w].copy_from_slice(&out[at..at + w]);
+        }
+    }
+    refined
+}
+
+/// The output `Refiner::load` or `load_wgsl` checks, by the model's role.
+fn output_name(role: Option<&str>) -> &'static str {
+    if role == Some(REFINER_ROLE) {
+        GUAVA_OUTPUT
+    } else {
+        OUTPUT
     }
 }
 

@@ -3,14 +3,14 @@
 
 mod layout;
 pub mod mesh;
-mod pipelines;
+pub(crate) mod pipelines;
 pub mod present;
-mod readback;
+pub(crate) mod readback;
 pub mod reference;
 mod rig;
 mod scan;
 pub mod sequence;
-mod shader;
+pub(crate) mod shader;
 mod sort;
 pub mod splatter;
 mod timing;
@@ -212,10 +212,21 @@ impl HeadlessRenderer {
         camera: &Camera,
         background: &[f32],
     ) -> Result<(SplatImage, RenderStats), SplatError> {
+        let stats = self.draw_cloud(cloud, camera, background)?;
+        Ok((self.read_image(camera, background), stats))
+    }
+
+    /// Uploads `cloud` and draws it, leaving the image on the GPU (for a refiner there).
+    pub fn draw_cloud(
+        &mut self,
+        cloud: &GaussianCloud,
+        camera: &Camera,
+        background: &[f32],
+    ) -> Result<RenderStats, SplatError> {
         self.check_size(camera)?;
         let (device, queue) = (&self.gpu.device, &self.gpu.queue);
         self.splatter.upload(device, queue, cloud)?;
-        Ok(self.render_uploaded(camera, background))
+        Ok(self.draw(camera, background))
     }
 
     /// Whether the device can draw `camera`'s image.
@@ -242,9 +253,21 @@ impl HeadlessRenderer {
         camera: &Camera,
         background: &[f32],
     ) -> Result<(SplatImage, RenderStats), AvatarRenderError> {
+        let stats = self.draw_avatar(avatar, posed, camera, background)?;
+        Ok((self.read_image(camera, background), stats))
+    }
+
+    /// [`Self::render_avatar`] leaving the image on the GPU (for a refiner there).
+    pub fn draw_avatar(
+        &mut self,
+        avatar: &mut GpuAvatar,
+        posed: &crate::body::PosedBody,
+        camera: &Camera,
+        background: &[f32],
+    ) -> Result<RenderStats, AvatarRenderError> {
         self.check_size(camera)?;
         self.pose_avatar(avatar, posed)?;
-        Ok(self.render_uploaded(camera, background))
+        Ok(self.draw(camera, background))
     }
 
     /// Attaches `avatar`, uploads `posed` and runs the rig pass, leaving the posed Gaussians in
@@ -272,12 +295,15 @@ impl HeadlessRenderer {
         background: &[f32],
     ) -> (SplatImage, RenderStats) {
         let stats = self.draw(camera, background);
+        (self.read_image(camera, background), stats)
+    }
+
+    /// The image drawn last, read back.
+    fn read_image(&self, camera: &Camera, background: &[f32]) -> SplatImage {
         let (device, queue) = (&self.gpu.device, &self.gpu.queue);
-        let image = self
-            .splatter
+        self.splatter
             .read_image(device, queue)
-            .unwrap_or_else(|| SplatImage::new(camera.width, camera.height, background.len()));
-        (image, stats)
+            .unwrap_or_else(|| SplatImage::new(camera.width, camera.height, background.len()))
     }
 
     /// Renders and waits, returning the stats but leaving the image on the GPU.

@@ -5,6 +5,7 @@ use super::shader;
 use std::collections::HashMap;
 use std::sync::Mutex;
 
+#[derive(Clone, Copy)]
 pub(crate) enum Binding {
     Uniform,
     Storage {
@@ -12,6 +13,10 @@ pub(crate) enum Binding {
     },
     /// Write-only r32float 2D array (the rasterizer's outputs).
     OutputTexture,
+    /// An r32float 2D array read with `textureLoad` (the splat output, read by the refiner).
+    InputTexture,
+    /// An unused binding number (entry points of one shader module share its numbering).
+    Skip,
 }
 
 pub(crate) fn bind_group_layout(
@@ -22,6 +27,7 @@ pub(crate) fn bind_group_layout(
     let entries: Vec<_> = bindings
         .iter()
         .enumerate()
+        .filter(|(_, b)| !matches!(b, Binding::Skip))
         .map(|(i, b)| wgpu::BindGroupLayoutEntry {
             binding: i as u32,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -35,6 +41,12 @@ pub(crate) fn bind_group_layout(
                     format: wgpu::TextureFormat::R32Float,
                     view_dimension: wgpu::TextureViewDimension::D2Array,
                 },
+                Binding::InputTexture => wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2Array,
+                    multisampled: false,
+                },
+                Binding::Skip => unreachable!("filtered out"),
             },
             count: None,
         })
@@ -53,7 +65,7 @@ fn buffer(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
     }
 }
 
-fn compute_pipeline(
+pub(crate) fn compute_pipeline(
     device: &wgpu::Device,
     label: &str,
     layout: &wgpu::BindGroupLayout,

@@ -24,6 +24,7 @@ pub const FEATURES_F16: &str = include_str!("../../shaders/features_f16.wgsl");
 pub const RIG: &str = include_str!("../../shaders/rig.wgsl");
 pub const PRESENT: &str = include_str!("../../shaders/present.wgsl");
 pub const MESH: &str = include_str!("../../shaders/mesh.wgsl");
+pub const REFINE: &str = include_str!("../../shaders/refine.wgsl");
 
 /// `const NAME: u32 = value` lines prepended to a pass.
 #[cfg(test)]
@@ -51,6 +52,7 @@ const ALL: &[(&str, &str, Consts)] = &[
     ("rig", RIG, &[]),
     ("present", PRESENT, &[]),
     ("mesh", MESH, &[]),
+    ("refine", REFINE, &[]),
 ];
 
 /// `pass` reading features stored as `storage`.
@@ -252,6 +254,35 @@ mod tests {
             )
         );
         assert_eq!(layout(&rig, "TriangleFrame").0 as u64, TRIANGLE_FRAME_SIZE);
+        {
+            use crate::refine::wgsl::OpParams;
+            let (size, offsets) = layout(&module("refine"), "Op");
+            assert_eq!(size as usize, size_of::<OpParams>());
+            let rust = offsets!(
+                OpParams,
+                in_c,
+                in_h,
+                in_w,
+                out_c,
+                out_h,
+                out_w,
+                kernel_h,
+                kernel_w,
+                stride_h,
+                stride_w,
+                pad_top,
+                pad_left,
+                kind,
+                src_channel,
+                dst_channel,
+                lo,
+                hi,
+                scale_h,
+                scale_w
+            );
+            assert_eq!(offsets[..rust.len()], rust[..]);
+            assert_eq!(offsets[rust.len()], 80, "the shader's _pad");
+        }
         assert_eq!(
             layout(&rig, "PosedVertex"),
             (

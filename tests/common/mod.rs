@@ -218,3 +218,9 @@ pub fn reconstruct_file(
     )?;
     Ok((o.avatar, o.report, o.view))
 }
+
+/// One device for tests that make many small GPU objects (fuzzing), opened once.
+pub fn shared_gpu() -> &'static GpuContext {
+    static GPU: std::sync::OnceLock<GpuContext> = std::sync::OnceLock::new();
+    GPU.get_or_init(gpu)
+}

@@ -361,6 +361,16 @@ impl GuavaApp {
         self.refined.frames
     }
 
+    /// Where the refiner runs.
+    pub fn set_refiner_on(&mut self, on: guava::refine::RefinerOn) {
+        self.refined.on = on;
+    }
+
+    /// Where the last refined frame was refined (`Refiner::engine_name`).
+    pub fn refined_engine(&self) -> Option<&'static str> {
+        self.refined.last_ms.map(|(_, engine)| engine)
+    }
+
     /// Refines while the user drags or plays too (the latest refined frame stays on screen).
     pub fn set_refine_while_interacting(&mut self, on: bool) {
         self.refined.while_interacting = on;

@@ -9,8 +9,7 @@ use std::sync::{Arc, Mutex};
 use guava::body::{BodyPose, Posable, PosedBody};
 use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
-use guava::onnx::OnnxRuntime;
-use guava::refine::Refiner;
+use guava::refine::{Refiner, RefinerOn};
 use guava::render::sequence;
 use guava::render::view::{AvatarRef, PoseRef};
 use guava::tracking::{Retarget, Tracking};
@@ -66,8 +65,8 @@ struct Shot {
     avatar: AvatarRef,
     outside: bool,
     background: [f32; 3],
-    /// The avatar's refiner, when the view refines.
-    refiner: Option<PathBuf>,
+    /// The avatar's refiner and where it runs, when the view refines.
+    refiner: Option<(PathBuf, RefinerOn)>,
 }
 
 impl Shot {
@@ -77,20 +76,20 @@ impl Shot {
         pose: &PoseRef,
         camera: &Camera,
     ) -> Result<image::RgbImage, String> {
-        let mut image = self
-            .offscreen
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .render_avatar(&self.avatar, pose, self.outside, camera)
-            .map_err(|e| e.to_string())?;
-        if let Some(path) = &self.refiner {
-            if refiner.is_none() {
-                let runtime = OnnxRuntime::load().map_err(|e| e.to_string())?;
-                *refiner = Some(Refiner::load(runtime, path).map_err(|e| e.to_string())?);
-            }
-            let r = refiner.as_mut().expect("loaded above");
-            image = r.refine(&image).map_err(|e| e.to_string())?;
-        }
+        let mut offscreen = self.offscreen.lock().unwrap_or_else(|e| e.into_inner());
+        let image = match &self.refiner {
+            Some((path, on)) => offscreen.refine_avatar(
+                refiner,
+                (path, *on),
+                &self.avatar,
+                pose,
+                self.outside,
+                camera,
+            )?,
+            None => offscreen
+                .render_avatar(&self.avatar, pose, self.outside, camera)
+                .map_err(|e| e.to_string())?,
+        };
         Ok(image.over(self.background))
     }
 }
@@ -140,7 +139,8 @@ impl GuavaApp {
                 let networks = self.networks.as_ref().map(|n| n.dir.as_path());
                 guava::refine::refiner_for(avatar.avatar.kind, networks).ok()
             })
-            .flatten();
+            .flatten()
+            .map(|path| (path, self.refined.on));
         Ok(Shot {
             offscreen,
             avatar: avatar.reference(body),

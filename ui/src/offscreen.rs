@@ -2,7 +2,10 @@
 //! photo, and the refined view. The splatting pipelines are built on first use (on the worker
 //! that needs them, not while the window opens); one job holds it at a time.
 
+use std::path::Path;
+
 use guava::gpu::GpuContext;
+use guava::refine::{Refiner, RefinerOn};
 use guava::render::view::{AvatarRef, PoseRef};
 use guava::render::{AvatarRenderError, GpuAvatar, HeadlessRenderer, SplatImage};
 
@@ -38,6 +41,49 @@ impl OffscreenRenderer {
         outside: bool,
         camera: &guava::camera::Camera,
     ) -> Result<SplatImage, AvatarRenderError> {
+        self.draw_avatar(avatar, pose, outside, camera)?;
+        let renderer = self.renderer();
+        let (device, queue) = (&renderer.gpu.device, &renderer.gpu.queue);
+        Ok(renderer
+            .splatter
+            .read_image(device, queue)
+            .unwrap_or_else(|| SplatImage::new(camera.width, camera.height, 3)))
+    }
+
+    /// The same, refined by the avatar's refiner (file `path`, run where `on` says; loaded into
+    /// `refiner` if that holds another): a WGSL refiner reads the splat layers on this device.
+    pub fn refine_avatar(
+        &mut self,
+        refiner: &mut Option<Refiner>,
+        (path, on): (&Path, RefinerOn),
+        avatar: &AvatarRef,
+        pose: &PoseRef,
+        outside: bool,
+        camera: &guava::camera::Camera,
+    ) -> Result<SplatImage, String> {
+        if refiner
+            .as_ref()
+            .is_none_or(|r| r.path != path || r.on != on)
+        {
+            let gpu = &self.renderer().gpu;
+            *refiner = Some(Refiner::load_on(on, gpu, path).map_err(|e| e.to_string())?);
+        }
+        self.draw_avatar(avatar, pose, outside, camera)
+            .map_err(|e| e.to_string())?;
+        let refiner = refiner.as_mut().expect("loaded above");
+        refiner
+            .refine_drawn(self.renderer())
+            .map_err(|e| e.to_string())
+    }
+
+    /// Draws, leaving the image on the GPU.
+    fn draw_avatar(
+        &mut self,
+        avatar: &AvatarRef,
+        pose: &PoseRef,
+        outside: bool,
+        camera: &guava::camera::Camera,
+    ) -> Result<(), AvatarRenderError> {
         self.renderer();
         let (Some(renderer), cached) = (&mut self.renderer, &mut self.avatar) else {
             unreachable!("built above");
@@ -56,8 +102,7 @@ impl OffscreenRenderer {
         let (_, gpu) = cached.as_mut().expect("made above");
         gpu.show_outside(queue, outside);
         let background = vec![0.0; avatar.avatar.channels];
-        Ok(renderer
-            .render_avatar(gpu, &pose.posed, camera, &background)?
-            .0)
+        renderer.draw_avatar(gpu, &pose.posed, camera, &background)?;
+        Ok(())
     }
 }

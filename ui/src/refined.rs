@@ -1,7 +1,8 @@
 //! The refiner pass in the viewer: once the view settles (no drag, no playback), the avatar is
 //! drawn again off screen at the viewport's size, refined by its refiner (the default one, or
-//! GUAVA's for GUAVA-mode avatars; ONNX Runtime on the CPU, a worker thread) and drawn over the
-//! raw splat image until anything changes.
+//! GUAVA's for GUAVA-mode avatars; on a worker thread, by ONNX Runtime on the CPU or our WGSL
+//! passes on the viewer's device, `RefinerOn`) and drawn over the raw splat image until
+//! anything changes.
 //! While the user drags or plays the raw splat is shown: the refiner is left out of those frames
 //! — unless refining *while interacting* too, when the latest refined frame stays on screen
 //! (behind the input by the refiner's time) and the next is made as soon as the worker is free.
@@ -11,8 +12,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use guava::camera::Camera;
-use guava::onnx::OnnxRuntime;
-use guava::refine::Refiner;
+use guava::refine::{Refiner, RefinerOn};
 use guava::render::view::{AvatarRef, PoseRef};
 
 use crate::offscreen::OffscreenRenderer;
@@ -22,6 +22,8 @@ use crate::offscreen::OffscreenRenderer;
 pub struct RefineKey {
     /// The refiner model's file.
     pub refiner: std::path::PathBuf,
+    /// Where it runs.
+    pub on: RefinerOn,
     pub avatar: u64,
     pub pose: u64,
     pub camera: Camera,
@@ -32,8 +34,10 @@ pub struct RefineKey {
 /// A refined frame, composited over the background, as 8-bit sRGB.
 struct Refined {
     image: egui::ColorImage,
-    /// Time to draw, read back and refine it.
+    /// Time to draw, refine and read it back.
     millis: f32,
+    /// Where it ran (`Refiner::engine_name`).
+    engine: &'static str,
 }
 
 pub struct RefinedView {
@@ -41,11 +45,14 @@ pub struct RefinedView {
     pub enabled: bool,
     /// Whether it also runs while the user drags or plays, showing its latest frame meanwhile.
     pub while_interacting: bool,
+    /// Where it runs (the user's choice).
+    pub on: RefinerOn,
     refiner: Arc<Mutex<Option<Refiner>>>,
     pending: Option<(RefineKey, Receiver<Result<Refined, String>>)>,
     shown: Option<(RefineKey, egui::TextureHandle)>,
-    /// The last refined frame's cost, and the last error (shown in the display panel).
-    pub last_ms: Option<f32>,
+    /// The last refined frame's cost and where it ran, and the last error (shown in the
+    /// display panel).
+    pub last_ms: Option<(f32, &'static str)>,
     pub error: Option<String>,
     /// Why the avatar on screen has no refiner to run (shown in the display panel).
     pub unavailable: Option<String>,
@@ -62,6 +69,7 @@ impl Default for RefinedView {
         Self {
             enabled: true,
             while_interacting: false,
+            on: RefinerOn::Auto,
             refiner: Arc::default(),
             pending: None,
             shown: None,
@@ -108,7 +116,7 @@ impl RefinedView {
                 Ok(Ok(refined)) if *k == key || behind => {
                     let texture =
                         ctx.load_texture("refined view", refined.image, Default::default());
-                    self.last_ms = Some(refined.millis);
+                    self.last_ms = Some((refined.millis, refined.engine));
                     self.frames += 1;
                     self.shown = Some((k.clone(), texture));
                     self.pending = None;
@@ -140,7 +148,7 @@ impl RefinedView {
     }
 }
 
-/// Draws, reads back and refines one frame, composited over the key's background.
+/// Draws and refines one frame, composited over the key's background.
 fn refine(
     refiner: &Mutex<Option<Refiner>>,
     offscreen: &Mutex<OffscreenRenderer>,
@@ -150,20 +158,17 @@ fn refine(
 ) -> Result<Refined, String> {
     let started = Instant::now();
     let mut refiner = refiner.lock().unwrap_or_else(|e| e.into_inner());
-    if refiner.as_ref().is_none_or(|r| r.path != key.refiner) {
-        let runtime = OnnxRuntime::load().map_err(|e| e.to_string())?;
-        *refiner = Some(Refiner::load(runtime, &key.refiner).map_err(|e| e.to_string())?);
-    }
-    let image = offscreen
+    let refined = offscreen
         .lock()
         .unwrap_or_else(|e| e.into_inner())
-        .render_avatar(avatar, pose, key.outside, &key.camera)
-        .map_err(|e| e.to_string())?;
-    let refined = refiner
-        .as_mut()
-        .expect("loaded above")
-        .refine(&image)
-        .map_err(|e| e.to_string())?;
+        .refine_avatar(
+            &mut refiner,
+            (&key.refiner, key.on),
+            avatar,
+            pose,
+            key.outside,
+            &key.camera,
+        )?;
     let rgb = refined.over(key.background);
     Ok(Refined {
         image: egui::ColorImage::from_rgb(
@@ -171,5 +176,6 @@ fn refine(
             rgb.as_raw(),
         ),
         millis: started.elapsed().as_secs_f32() * 1e3,
+        engine: refiner.as_ref().map_or("", |r| r.engine_name()),
     })
 }

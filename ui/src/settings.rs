@@ -17,6 +17,7 @@ pub struct Settings {
     background: [f32; 3],
     refine: bool,
     refine_while_interacting: bool,
+    refiner_on: guava::refine::RefinerOn,
     interactive_scale: Option<f32>,
     fov_deg: f32,
     export_size: [u32; 2],
@@ -33,6 +34,7 @@ impl Default for Settings {
             background: [0.0; 3],
             refine: true,
             refine_while_interacting: false,
+            refiner_on: guava::refine::RefinerOn::Auto,
             interactive_scale: None,
             fov_deg: 50.0,
             export_size: [1024, 1024],
@@ -56,6 +58,7 @@ impl Settings {
             background: app.background,
             refine: app.refined.enabled,
             refine_while_interacting: app.refined.while_interacting,
+            refiner_on: app.refined.on,
             interactive_scale: Some(app.interaction.scale),
             fov_deg: app.orbit.fov_y_rad.to_degrees(),
             export_size: [e.width, e.height],
@@ -75,6 +78,7 @@ impl Settings {
         }
         app.refined.enabled = self.refine;
         app.refined.while_interacting = self.refine_while_interacting;
+        app.refined.on = self.refiner_on;
         if let Some(s) = self.interactive_scale.filter(|s| *s > 0.0 && *s <= 1.0) {
             app.interaction.scale = s;
         }

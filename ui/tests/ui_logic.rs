@@ -749,6 +749,28 @@ fn the_settled_view_is_refined_and_a_drag_shows_the_raw_splat() {
     );
 }
 
+/// The refiner runs where the display panel says: our WGSL passes on the viewer's device, or
+/// ONNX Runtime on the CPU; changing it refines the view again there. (A small window: on
+/// lavapipe the passes take seconds for the viewport.)
+#[test]
+fn the_refiner_runs_where_the_user_chooses() {
+    use guava::refine::RefinerOn;
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(560.0, 320.0))
+        .wgpu()
+        .build_eframe(move |cc| GuavaApp::new(cc, Options::default()));
+    h.run();
+    h.state_mut().set_refiner_on(RefinerOn::Gpu);
+    h.state_mut().reconstruct_synthetic_photo();
+    wait_until(&mut h, |app| app.avatar_info().is_some());
+    wait_until(&mut h, |app| app.refined_frames() > 0);
+    assert_eq!(h.state().refined_engine(), Some("WGSL compute passes"));
+    h.state_mut().set_refiner_on(RefinerOn::Cpu);
+    wait_until(&mut h, |app| app.refined_frames() > 1);
+    assert_eq!(h.state().refined_engine(), Some("ONNX Runtime (CPU)"));
+    assert_eq!(h.state().refined_frames(), 2);
+}
+
 /// The shown body's control groups.
 fn controls<'a>(
     h: &'a mut Harness<'static, GuavaApp>,

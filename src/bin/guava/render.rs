@@ -13,7 +13,7 @@ use guava::body::{BodyModel, BodyPose, EhmModel, Posable, PosedBody};
 use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
 use guava::gpu::GpuContext;
-use guava::refine::Refiner;
+use guava::refine::{Refiner, RefinerOn};
 use guava::render::{HeadlessRenderer, sequence};
 use guava::tracking::{Retarget, Tracking};
 
@@ -51,6 +51,10 @@ pub struct RenderArgs {
     /// GUAVA-mode avatar is refined by.
     #[arg(long, requires = "refine")]
     guava_models: Option<PathBuf>,
+    /// With --refine: where the refiner runs. auto: our WGSL passes on a hardware GPU, ONNX
+    /// Runtime on the CPU with a software adapter (lavapipe) or a model the passes do not run.
+    #[arg(long, value_enum, default_value = "auto", requires = "refine")]
+    refiner_on: RefinerOnArg,
     /// The PNG to write (one frame).
     #[arg(long, required_unless_present = "sequence")]
     out: Option<PathBuf>,
@@ -229,14 +233,27 @@ fn posed_avatar(
     Ok((cloud, camera))
 }
 
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum RefinerOnArg {
+    Auto,
+    Cpu,
+    Gpu,
+}
+
 pub fn run(args: RenderArgs) -> Result<()> {
     let (subject, name) = Subject::load(&args)?;
+    let renderer = HeadlessRenderer::new(GpuContext::headless()?);
     let refiner = match (&subject, args.refine) {
         (Subject::Avatar(posed), true) => {
             let avatar = &posed.avatar;
             let path = guava::refine::refiner_for(avatar.kind, args.guava_models.as_deref())
                 .map_err(|e| anyhow::anyhow!("{name}: {e} (--guava-models)"))?;
-            Some(Refiner::load(guava::onnx::OnnxRuntime::load()?, &path)?)
+            let on = match args.refiner_on {
+                RefinerOnArg::Auto => RefinerOn::Auto,
+                RefinerOnArg::Cpu => RefinerOn::Cpu,
+                RefinerOnArg::Gpu => RefinerOn::Gpu,
+            };
+            Some(Refiner::load_on(on, &renderer.gpu, &path)?)
         }
         _ => None,
     };
@@ -249,7 +266,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         name,
         path,
         rig: Rig::default(),
-        renderer: HeadlessRenderer::new(GpuContext::headless()?),
+        renderer,
         refiner,
         framed_on: None,
         args: &args,
@@ -273,6 +290,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
                 out.display(),
                 frames.renderer.gpu.adapter_label()
             );
+            if let Some(refiner) = &frames.refiner {
+                println!(
+                    "refined by {} on {}",
+                    refiner.description,
+                    refiner.engine_name()
+                );
+            }
             Ok(())
         }
         Some(dir) => frames.sequence(dir),
@@ -323,10 +347,13 @@ impl Frames<'_> {
             }
         };
         let background = vec![0.0; cloud.channels];
-        let (mut image, stats) = self.renderer.render(&cloud, &camera, &background)?;
-        if let Some(refiner) = &mut self.refiner {
-            image = refiner.refine(&image)?;
-        }
+        let (image, stats) = match &mut self.refiner {
+            Some(refiner) => {
+                let stats = self.renderer.draw_cloud(&cloud, &camera, &background)?;
+                (refiner.refine_drawn(&self.renderer)?, stats)
+            }
+            None => self.renderer.render(&cloud, &camera, &background)?,
+        };
         Ok((image.to_rgb8(), stats))
     }
 

@@ -3,6 +3,7 @@
 //! rig and encoding on the CPU, each splatting stage on the GPU where it has timestamps, the
 //! refiner), whether the frame is refined, the splatting pass's counters and memory.
 
+use guava::refine::RefinerOn;
 use guava::render::present::PresentMode;
 use guava::render::splatter::Stage;
 
@@ -85,10 +86,23 @@ impl GuavaApp {
             // The photo lines up with the avatar only through its own camera.
             self.camera_mode = CameraMode::Source;
         }
-        if let Some(ms) = self.refined.last_ms {
-            ui.label(format!(
-                "last refined frame: {ms:.0} ms (draw, read back, ONNX Runtime on the CPU)"
-            ));
+        ui.add_enabled_ui(self.refined.enabled, |ui| {
+            egui::ComboBox::new("refiner_on", "refiner runs on")
+                .selected_text(self.refined.on.name())
+                .show_ui(ui, |ui| {
+                    for on in RefinerOn::ALL {
+                        ui.selectable_value(&mut self.refined.on, on, on.name());
+                    }
+                })
+                .response
+                .on_hover_text(
+                    "auto: our WGSL passes on a hardware GPU (only the refined picture is read \
+                     back), ONNX Runtime on the CPU with a software adapter, where it is much \
+                     faster, and for GUAVA's refiner, whose operators the passes do not run",
+                );
+        });
+        if let Some((ms, engine)) = self.refined.last_ms {
+            ui.label(format!("last refined frame: {ms:.0} ms ({engine})"));
         }
         if let Some(e) = &self.refined.error {
             ui.colored_label(ui.visuals().error_fg_color, format!("refiner off: {e}"));
@@ -149,8 +163,8 @@ impl GuavaApp {
                     }
                     None => row("GPU stages", "no timestamps here".into()),
                 }
-                if let Some(ms) = self.refined.last_ms {
-                    row("refine (last)", format!("{ms:.0} ms"));
+                if let Some((ms, engine)) = self.refined.last_ms {
+                    row("refine (last)", format!("{ms:.0} ms, {engine}"));
                 }
                 row(
                     "on screen",

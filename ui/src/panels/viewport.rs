@@ -323,6 +323,7 @@ impl GuavaApp {
         let camera = camera.scaled((max / largest).min(1.0));
         let key = RefineKey {
             refiner,
+            on: self.refined.on,
             avatar: avatar.id,
             pose: pose.id,
             camera,

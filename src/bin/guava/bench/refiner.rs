@@ -27,6 +27,9 @@ pub struct RefinerBenchArgs {
     /// `tools/export_guava_onnx.py --random 0 --only refiner`) per frame at its own side.
     #[arg(long)]
     guava_refiner: Option<PathBuf>,
+    /// Only the per-frame times (skip the held-out pairs).
+    #[arg(long)]
+    frames_only: bool,
 }
 
 #[derive(Default)]
@@ -66,16 +69,38 @@ impl Sums {
 pub fn refiner(args: &RefinerBenchArgs) -> anyhow::Result<()> {
     let model = args.model.clone().unwrap_or_else(|| DEFAULT_REFINER.into());
     let mut refiner = Refiner::load(OnnxRuntime::load()?, &model)?;
-    let body = BodyModel::default_body()?;
     let mut renderer = HeadlessRenderer::new(GpuContext::headless()?);
-    let mut pipeline = Pipeline::default();
     println!(
-        "{}: {}\n{}; CPU {}; ONNX Runtime on the CPU\n",
+        "{}: {}\n{}; CPU {}\n",
         model.display(),
         refiner.description,
         renderer.gpu.adapter_label(),
         cpu_name()
     );
+    if !args.frames_only {
+        held_out(&mut refiner, &mut renderer)?;
+    }
+    let started = Instant::now();
+    let mut wgsl = Refiner::load_wgsl(&renderer.gpu, &model);
+    let compile_ms = started.elapsed().as_secs_f64() * 1e3;
+    per_frame(&mut refiner, wgsl.as_mut().ok(), &mut renderer)?;
+    match &wgsl {
+        Ok(_) => println!(
+            "(WGSL: reading the model and building its pipelines took {compile_ms:.0} ms; it \
+             adds no crate to the build)"
+        ),
+        Err(e) => println!("WGSL passes not measured: {e}"),
+    }
+    if let Some(path) = &args.guava_refiner {
+        guava_refiner(path, &renderer.gpu)?;
+    }
+    Ok(())
+}
+
+/// Raw and refined against the truth on the held-out pairs, per subject kind.
+fn held_out(refiner: &mut Refiner, renderer: &mut HeadlessRenderer) -> anyhow::Result<()> {
+    let body = BodyModel::default_body()?;
+    let mut pipeline = Pipeline::default();
     println!("held-out pairs (seeds, yaws ±30°/±60° and poses not trained on), mean per pair:");
     println!(
         "{:<20} {:>5} {:>8} {:>8} {:>7} {:>8} {:>8} {:>8} {:>8}",
@@ -93,22 +118,16 @@ pub fn refiner(args: &RefinerBenchArgs) -> anyhow::Result<()> {
     let mut all = Sums::default();
     let mut failed = None;
     for spec in pairs::specs(Split::HeldOut) {
-        pairs::make(
-            &mut renderer,
-            &mut pipeline,
-            &body,
-            &spec,
-            &mut |_, pair| {
-                let refined = match refiner.refine(&pair.input) {
-                    Ok(r) => r,
-                    Err(e) => return failed = Some(e),
-                };
-                if let (Some(raw), Some(fine)) = (pair.score(&pair.input), pair.score(&refined)) {
-                    per_kind[spec.kind].add(raw, fine);
-                    all.add(raw, fine);
-                }
-            },
-        )?;
+        pairs::make(renderer, &mut pipeline, &body, &spec, &mut |_, pair| {
+            let refined = match refiner.refine(&pair.input) {
+                Ok(r) => r,
+                Err(e) => return failed = Some(e),
+            };
+            if let (Some(raw), Some(fine)) = (pair.score(&pair.input), pair.score(&refined)) {
+                per_kind[spec.kind].add(raw, fine);
+                all.add(raw, fine);
+            }
+        })?;
         if let Some(e) = failed.take() {
             return Err(e.into());
         }
@@ -118,24 +137,38 @@ pub fn refiner(args: &RefinerBenchArgs) -> anyhow::Result<()> {
     }
     all.row("all");
 
-    println!("\nper frame, medians of 5 (readback of the splat image, then ONNX Runtime):");
-    println!("{:<12} {:>12} {:>12}", "size", "readback ms", "refine ms");
+    Ok(())
+}
+
+/// Per frame, at the viewer's sizes: reading the splat image back and refining it with ONNX
+/// Runtime, against our own WGSL passes reading the splat layers where they lie.
+fn per_frame(
+    onnx: &mut Refiner,
+    mut wgsl: Option<&mut Refiner>,
+    renderer: &mut HeadlessRenderer,
+) -> anyhow::Result<()> {
+    println!(
+        "\nper frame, medians of 5: (a) read the splat image back, ONNX Runtime on the CPU; (b) \
+         WGSL passes on the splatting device (gather the layers, run, read the output back)"
+    );
+    println!(
+        "{:<12} {:>12} {:>12} {:>10} {:>10}",
+        "size", "readback ms", "ORT ms", "(a) ms", "(b) ms"
+    );
+    // A default avatar's layout: RGB and a confidence channel.
+    let knot = guava::gaussians::synthetic::torus_knot(10_000, 4);
+    let mut cloud = guava::gaussians::GaussianCloud::new(4);
+    for i in 0..knot.len() {
+        let rgb = knot.features_of(i);
+        cloud.push(
+            knot.positions[i],
+            knot.rotations[i],
+            knot.scales[i],
+            knot.opacities[i],
+            &[rgb[0], rgb[1], rgb[2], 1.0],
+        );
+    }
     for (w, h) in [(256u32, 256u32), (512, 512), (768, 704)] {
-        let image = SplatImage::new(w, h, 4);
-        let (mut readback, mut refine) = (Vec::new(), Vec::new());
-        // A default avatar's layout: RGB and a confidence channel.
-        let knot = guava::gaussians::synthetic::torus_knot(10_000, 4);
-        let mut cloud = guava::gaussians::GaussianCloud::new(4);
-        for i in 0..knot.len() {
-            let rgb = knot.features_of(i);
-            cloud.push(
-                knot.positions[i],
-                knot.rotations[i],
-                knot.scales[i],
-                knot.opacities[i],
-                &[rgb[0], rgb[1], rgb[2], 1.0],
-            );
-        }
         let camera = guava::camera::Camera::from_fov_y(
             guava::camera::orbit(glam::Vec3::ZERO, 3.0, 0.3, 0.2),
             w,
@@ -143,33 +176,44 @@ pub fn refiner(args: &RefinerBenchArgs) -> anyhow::Result<()> {
             0.8,
         );
         renderer.render(&cloud, &camera, &[0.0; 4])?;
+        let (mut readback, mut refine, mut on_device) = (Vec::new(), Vec::new(), Vec::new());
         for _ in 0..5 {
             let t = Instant::now();
-            let read = renderer
+            let image = renderer
                 .splatter
-                .read_image(&renderer.gpu.device, &renderer.gpu.queue);
+                .read_image(&renderer.gpu.device, &renderer.gpu.queue)
+                .unwrap_or_else(|| SplatImage::new(w, h, 4));
             readback.push(t.elapsed().as_secs_f64() * 1e3);
-            let input = read.unwrap_or_else(|| image.clone());
             let t = Instant::now();
-            refiner.refine(&input)?;
+            onnx.refine(&image)?;
             refine.push(t.elapsed().as_secs_f64() * 1e3);
+            if let Some(wgsl) = wgsl.as_deref_mut() {
+                let t = Instant::now();
+                wgsl.refine_drawn(renderer)?;
+                on_device.push(t.elapsed().as_secs_f64() * 1e3);
+            }
         }
+        let (readback, refine) = (median(readback), median(refine));
+        let b = if on_device.is_empty() {
+            "-".to_string()
+        } else {
+            format!("{:.1}", median(on_device))
+        };
         println!(
-            "{:<12} {:>12.1} {:>12.1}",
+            "{:<12} {:>12.1} {:>12.1} {:>10.1} {:>10}",
             format!("{w}×{h}"),
-            median(readback),
-            median(refine)
+            readback,
+            refine,
+            readback + refine,
+            b
         );
-    }
-    if let Some(path) = &args.guava_refiner {
-        guava_refiner(path)?;
     }
     Ok(())
 }
 
 /// GUAVA's refiner per frame at its own side (no resampling), on a deterministic feature image
 /// (the network's cost does not depend on the values).
-fn guava_refiner(path: &std::path::Path) -> anyhow::Result<()> {
+fn guava_refiner(path: &std::path::Path, gpu: &GpuContext) -> anyhow::Result<()> {
     let mut refiner = Refiner::load(OnnxRuntime::load()?, path)?;
     let guava::refine::RefinerKind::Guava { channels, side } = refiner.kind else {
         anyhow::bail!("{}: not GUAVA's refiner (its metadata)", path.display());
@@ -193,5 +237,10 @@ fn guava_refiner(path: &std::path::Path) -> anyhow::Result<()> {
         refiner.description,
         median(times)
     );
+    // Our own passes run the operators a small U-Net uses; StyleUNet's modulated convolutions
+    // are not among them: say which operator stops it.
+    if let Err(e) = Refiner::load_wgsl(gpu, path) {
+        println!("WGSL passes: {e}");
+    }
     Ok(())
 }
