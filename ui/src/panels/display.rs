@@ -102,7 +102,7 @@ impl GuavaApp {
                 );
         });
         if let Some((ms, engine)) = self.refined.last_ms {
-            ui.label(format!("last refined frame: {ms:.0} ms ({engine})"));
+            ui.label(format!("last refined frame: {ms:.0} ms, {engine}"));
         }
         if let Some(e) = &self.refined.error {
             ui.colored_label(ui.visuals().error_fg_color, format!("refiner off: {e}"));
