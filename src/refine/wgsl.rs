@@ -169,17 +169,14 @@ struct Plan {
     size: [u32; 2],
     shapes: Vec<[u32; 3]>,
     buffers: Vec<wgpu::Buffer>,
-    /// Per dispatch: pipeline index into the entry points, bind group, workgroups.
-    dispatches: Vec<(Entry, wgpu::BindGroup, [u32; 3])>,
+    dispatches: Vec<Dispatch>,
 }
 
-#[derive(Clone, Copy)]
-enum Entry {
-    Conv,
-    Resize,
-    Copy,
-    Unary,
-    Add,
+/// One compute dispatch of a plan: workgroups `[n, 0, 0]` are a flat count (`dispatch_1d`).
+struct Dispatch {
+    pipeline: wgpu::ComputePipeline,
+    bind: wgpu::BindGroup,
+    groups: [u32; 3],
 }
 
 impl WgslNetwork {
@@ -351,15 +348,12 @@ impl WgslNetwork {
             label: Some("refine"),
             timestamp_writes: None,
         });
-        for (entry, bind, groups) in &plan.dispatches {
-            let p = &self.pipelines;
-            let pipeline = match entry {
-                Entry::Conv => &p.conv.0,
-                Entry::Resize => &p.resize.0,
-                Entry::Copy => &p.copy.0,
-                Entry::Unary => &p.unary.0,
-                Entry::Add => &p.add.0,
-            };
+        for Dispatch {
+            pipeline,
+            bind,
+            groups,
+        } in &plan.dispatches
+        {
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, bind, &[]);
             if groups[1] == 0 {
@@ -433,10 +427,12 @@ impl WgslNetwork {
             step.dispatches(device, &self.pipelines, &shapes, &buffers, &mut dispatches);
         }
         let max = limits.max_compute_workgroups_per_dimension;
-        if let Some((_, _, groups)) = dispatches.iter().find(|(_, _, g)| {
-            // Flat dispatches ([n, 0, 0]) fold into y themselves.
-            (g[1] > 0 && g[0] > max) || g[1] > max || g[2] > max
-        }) {
+        if let Some(Dispatch { groups, .. }) =
+            dispatches.iter().find(|Dispatch { groups: g, .. }| {
+                // Flat dispatches ([n, 0, 0]) fold into y themselves.
+                (g[1] > 0 && g[0] > max) || g[1] > max || g[2] > max
+            })
+        {
             return Err(format!(
                 "a {h}×{w} input needs {groups:?} workgroups, over {max}"
             ));
@@ -580,7 +576,7 @@ impl Step {
         pipelines: &Pipelines,
         shapes: &[[u32; 3]],
         buffers: &[wgpu::Buffer],
-        out: &mut Vec<(Entry, wgpu::BindGroup, [u32; 3])>,
+        out: &mut Vec<Dispatch>,
     ) {
         let dst = self.dst();
         let [out_c, out_h, out_w] = shapes[dst];
@@ -590,9 +586,10 @@ impl Step {
             out_w,
             ..Default::default()
         };
-        let bind = |layout: &wgpu::BindGroupLayout,
-                    params: OpParams,
-                    bindings: &[(u32, &wgpu::Buffer)]| {
+        let mut push = |(pipeline, layout): &(wgpu::ComputePipeline, wgpu::BindGroupLayout),
+                        params: OpParams,
+                        bindings: &[(u32, &wgpu::Buffer)],
+                        groups: [u32; 3]| {
             let uniform = uniform(device, &params);
             let mut entries = vec![entry(0, uniform.as_entire_binding())];
             entries.extend(
@@ -600,11 +597,16 @@ impl Step {
                     .iter()
                     .map(|(i, b)| entry(*i, b.as_entire_binding())),
             );
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
+            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("refine::step"),
                 layout,
                 entries: &entries,
-            })
+            });
+            out.push(Dispatch {
+                pipeline: pipeline.clone(),
+                bind,
+                groups,
+            });
         };
         let flat = [(out_c * out_h * out_w).div_ceil(64), 0, 0];
         let image = [out_w.div_ceil(8), out_h.div_ceil(8), out_c];
@@ -632,21 +634,16 @@ impl Step {
                     kind: *kind,
                     ..base
                 };
-                let layout = &pipelines.conv.1;
-                let group = bind(
-                    layout,
+                push(
+                    &pipelines.conv,
                     params,
                     &[(1, &buffers[*src]), (2, &buffers[dst]), (3, weights)],
-                );
-                out.push((
-                    Entry::Conv,
-                    group,
                     [
                         out_w.div_ceil(8 * CONV_PIXELS),
                         out_h.div_ceil(8),
                         out_c.div_ceil(4),
                     ],
-                ));
+                );
             }
             Step::Unary {
                 src, kind, bounds, ..
@@ -657,20 +654,12 @@ impl Step {
                     hi: bounds[1],
                     ..base
                 };
-                let group = bind(
-                    &pipelines.unary.1,
-                    params,
-                    &[(1, &buffers[*src]), (2, &buffers[dst])],
-                );
-                out.push((Entry::Unary, group, flat));
+                let io = [(1, &buffers[*src]), (2, &buffers[dst])];
+                push(&pipelines.unary, params, &io, flat);
             }
             Step::Add { a, b, .. } => {
-                let group = bind(
-                    &pipelines.add.1,
-                    base,
-                    &[(1, &buffers[*a]), (2, &buffers[dst]), (4, &buffers[*b])],
-                );
-                out.push((Entry::Add, group, flat));
+                let io = [(1, &buffers[*a]), (2, &buffers[dst]), (4, &buffers[*b])];
+                push(&pipelines.add, base, &io, flat);
             }
             Step::Resize { src, scale, .. } => {
                 let [in_c, in_h, in_w] = shapes[*src];
@@ -682,12 +671,8 @@ impl Step {
                     scale_w: scale[1],
                     ..base
                 };
-                let group = bind(
-                    &pipelines.resize.1,
-                    params,
-                    &[(1, &buffers[*src]), (2, &buffers[dst])],
-                );
-                out.push((Entry::Resize, group, image));
+                let io = [(1, &buffers[*src]), (2, &buffers[dst])];
+                push(&pipelines.resize, params, &io, image);
             }
             Step::Concat { srcs, .. } => {
                 let mut at = 0;
@@ -698,12 +683,9 @@ impl Step {
                         dst_channel: at,
                         ..base
                     };
-                    let group = bind(
-                        &pipelines.copy.1,
-                        params,
-                        &[(1, &buffers[s]), (2, &buffers[dst])],
-                    );
-                    out.push((Entry::Copy, group, [(c * out_h * out_w).div_ceil(64), 0, 0]));
+                    let io = [(1, &buffers[s]), (2, &buffers[dst])];
+                    let groups = [(c * out_h * out_w).div_ceil(64), 0, 0];
+                    push(&pipelines.copy, params, &io, groups);
                     at += c;
                 }
             }
@@ -715,12 +697,8 @@ impl Step {
                     src_channel: first,
                     ..base
                 };
-                let group = bind(
-                    &pipelines.copy.1,
-                    params,
-                    &[(1, &buffers[*src]), (2, &buffers[dst])],
-                );
-                out.push((Entry::Copy, group, flat));
+                let io = [(1, &buffers[*src]), (2, &buffers[dst])];
+                push(&pipelines.copy, params, &io, flat);
             }
         }
     }
