@@ -144,9 +144,11 @@ impl GuavaApp {
             .num_columns(2)
             .min_col_width(120.0)
             .show(ui, |ui| {
+                // Values wrap in the last column: a long one (a slow refine, an engine's name)
+                // must not widen the side panel and so resize the viewport under the user.
                 let mut row = |k: &str, v: String| {
                     ui.label(k);
-                    ui.monospace(v);
+                    ui.add(egui::Label::new(egui::RichText::new(v).monospace()).wrap());
                     ui.end_row();
                 };
                 row("UI frame", format!("{:.1} ms", self.clock.frame_ms));
