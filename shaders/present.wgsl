@@ -1,5 +1,6 @@
 //! Present: draws the splat output into the viewer's colour target with a full-screen triangle.
-//! Reads the channel layers straight from the textures the rasterizer wrote (no copy).
+//! Reads the channels straight from the textures the rasterizer wrote (no copy): four to a texel,
+//! channel c in layer c / 4, lane c % 4; alpha and inverse depth in one texel.
 //! Modes: three chosen feature channels as RGB, accumulated alpha, or inverse depth.
 
 struct Present {
@@ -19,6 +20,10 @@ const MODE_DEPTH: u32 = 2u;
 @group(0) @binding(1) var features: texture_2d_array<f32>;
 @group(0) @binding(2) var aux: texture_2d_array<f32>;
 
+fn channel(p: vec2<u32>, c: u32) -> f32 {
+    return textureLoad(features, p, c / 4u, 0)[c % 4u];
+}
+
 @vertex
 fn vs_main(@builtin(vertex_index) v: u32) -> FullscreenOut {
     return fullscreen_vertex(v);
@@ -34,16 +39,12 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
         }
         case MODE_DEPTH: {
             let r = params.inv_depth_range;
-            let d = textureLoad(aux, p, 1u, 0).x;
+            let d = textureLoad(aux, p, 0u, 0).y;
             c = vec3<f32>(clamp((d - r.x) / max(r.y - r.x, 1e-12), 0.0, 1.0));
         }
         default: {
             let ch = params.rgb_channels;
-            c = vec3<f32>(
-                textureLoad(features, p, ch.x, 0).x,
-                textureLoad(features, p, ch.y, 0).x,
-                textureLoad(features, p, ch.z, 0).x,
-            );
+            c = vec3<f32>(channel(p, ch.x), channel(p, ch.y), channel(p, ch.z));
         }
     }
     // Feature values are display-referred (like the photos they come from); clamp NaN-free.

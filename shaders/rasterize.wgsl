@@ -1,8 +1,9 @@
 //! Rasterize: one 16×16 tile per workgroup (3DGS forward.cu:renderCUDA). Each thread shades PIXELS
 //! pixels of a column: Gaussians of the tile are fetched front to back in batches of one per thread
 //! into workgroup memory, and each loaded Gaussian is reused for all of a thread's pixels. PIXELS = 1
-//! is the usual GPU layout; CPU adapters (lavapipe) get 4 for up to four channels, because there a
-//! load from workgroup memory costs far more than the arithmetic.
+//! is the usual GPU layout; CPU adapters (lavapipe) get 4 up to 16 channels and 2 above
+//! (RasterTuning::pixels_per_thread), because there a load from workgroup memory costs far more
+//! than the arithmetic.
 //! Per pixel: α = min(0.99, o·exp(power)), skipping power > 0 and α < 1/255, stopping before the
 //! transmittance would fall under 1e-4. The workgroup leaves once every pixel is done.
 //! Pixels go to threads in blocks of 4 × 2·PIXELS, 8 consecutive invocations each (block_pixel):
@@ -15,9 +16,11 @@
 //! How a thread reads a batched Gaussian (load_batched, hold_features, feature_word, block_done)
 //! comes from rasterize_fetch_loads.wgsl or, on CPU adapters with 8-lane subgroups,
 //! rasterize_fetch_shuffles.wgsl, composed before this file.
-//! Writes CHANNELS layers of an r32float texture array (the reference's [C, H, W]) plus accumulated
-//! alpha and expected inverse depth as two layers of another. Textures, not buffers: a 4096² image of
-//! 32 channels is 2 GiB, beyond what adapters bind as one storage buffer (128 MiB on lavapipe).
+//! Writes the channels four to a texel, FEATURE_WORDS layers of an rgba32float texture array (layer
+//! q holds channels 4q..4q+3, zero past CHANNELS), and accumulated alpha with expected inverse depth
+//! as one rg32float texel: a pixel of 32 channels is 9 stores, not 34 (on CPU adapters each store
+//! costs about as much as the blending of a few splats). Textures, not buffers: a 4096² image of 32
+//! channels is 2 GiB, beyond what adapters bind as one storage buffer (128 MiB on lavapipe).
 //! CHANNELS, PIXELS and SKIP_MISSED are constants prepended by src/render/shader.rs.
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -29,10 +32,11 @@
 // words as with one float per load.
 @group(0) @binding(4) var<storage, read> features: array<FeatureWord>;
 const FEATURE_WORDS: u32 = (CHANNELS + 3u) / 4u;
-@group(0) @binding(5) var<storage, read> background: array<f32>;
-@group(0) @binding(6) var out_features: texture_storage_2d_array<r32float, write>;
-// Layer 0: accumulated alpha 1 − T; layer 1: Σ αT/z.
-@group(0) @binding(7) var out_aux: texture_storage_2d_array<r32float, write>;
+// The background per channel, four to a word like the features (zero-padded).
+@group(0) @binding(5) var<storage, read> background: array<vec4<f32>>;
+@group(0) @binding(6) var out_features: texture_storage_2d_array<rgba32float, write>;
+// One layer: accumulated alpha 1 − T and Σ αT/z.
+@group(0) @binding(7) var out_aux: texture_storage_2d_array<rg32float, write>;
 
 const TILE_PIXELS: u32 = TILE_SIZE * TILE_SIZE;
 const THREADS: u32 = TILE_PIXELS / PIXELS;
@@ -249,18 +253,12 @@ fn main(
     for (var k = 0u; k < PIXELS; k++) {
         let pix = origin + block_pixel(lid, k);
         if pix.x < frame.size.x && pix.y < frame.size.y {
-            // Word by word, so each index into `acc` is a constant once the loops unroll.
+            // Word by word, so each index into `acc` is a constant once the loops unroll. The
+            // padding lanes stay zero: their features are zero and so is their background.
             for (var q = 0u; q < FEATURE_WORDS; q++) {
-                let v = acc[k * FEATURE_WORDS + q];
-                for (var i = 0u; i < 4u; i++) {
-                    let c = 4u * q + i;
-                    if c < CHANNELS {
-                        textureStore(out_features, pix, c, vec4<f32>(v[i] + t[k] * background[c], 0.0, 0.0, 0.0));
-                    }
-                }
+                textureStore(out_features, pix, q, acc[k * FEATURE_WORDS + q] + t[k] * background[q]);
             }
-            textureStore(out_aux, pix, 0u, vec4<f32>(1.0 - t[k], 0.0, 0.0, 0.0));
-            textureStore(out_aux, pix, 1u, vec4<f32>(inv_depth[k], 0.0, 0.0, 0.0));
+            textureStore(out_aux, pix, 0u, vec4<f32>(1.0 - t[k], inv_depth[k], 0.0, 0.0));
         }
     }
 }

@@ -163,9 +163,9 @@ fn add(@builtin(global_invocation_id) id: vec3<u32>) {
     dst[i] = src[i] + other[i];
 }
 
-// The network's input from the splatting pass's output: channel c is feature layer
-// `layers[c]`, or alpha where its top bit is set (GATHER_ALPHA in src/refine/wgsl.rs); the
-// image (in_h × in_w) is padded with zeros to out_h × out_w.
+// The network's input from the splatting pass's output: channel c is splat channel `layers[c]`
+// (four to a texel: layer l / 4, lane l % 4), or alpha where its top bit is set (GATHER_ALPHA in
+// src/refine/wgsl.rs); the image (in_h × in_w) is padded with zeros to out_h × out_w.
 @group(0) @binding(5) var features: texture_2d_array<f32>;
 @group(0) @binding(6) var aux: texture_2d_array<f32>;
 @group(0) @binding(7) var<storage, read> layers: array<u32>;
@@ -187,7 +187,7 @@ fn gather(@builtin(global_invocation_id) id: vec3<u32>) {
         if (layer & GATHER_ALPHA) != 0u {
             v = textureLoad(aux, p, 0, 0).x;
         } else {
-            v = textureLoad(features, p, layer, 0).x;
+            v = textureLoad(features, p, layer / 4u, 0)[layer % 4u];
         }
     }
     dst[(c * op.out_h + y) * op.out_w + x] = v;

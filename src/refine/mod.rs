@@ -330,7 +330,7 @@ impl Refiner {
                 .unwrap_or_else(|| SplatImage::new(1, 1, 0));
             return self.refine(&image);
         };
-        let channels = features.size().depth_or_array_layers as usize;
+        let channels = splatter.channels().unwrap_or(0) as usize;
         if channels < 4 {
             return Err(RefineError::Channels {
                 path: self.path.clone(),
@@ -356,12 +356,9 @@ impl Refiner {
             )));
         }
         let mut refined = unpad_default(&out, width, height);
-        let mut aux = crate::render::readback::read_texture_layers(
-            &renderer.gpu.device,
-            &renderer.gpu.queue,
-            aux,
-        );
-        refined.inv_depth = aux.split_off(width as usize * height as usize);
+        if let Some([_, inv_depth]) = splatter.read_aux(&renderer.gpu.device, &renderer.gpu.queue) {
+            refined.inv_depth = inv_depth;
+        }
         Ok(refined)
     }
 

@@ -56,6 +56,7 @@ const UNARY_CLIP: u32 = 3;
 /// Where one input channel comes from in the splatting pass's output.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Layer {
+    /// A splat channel, by index (the gather finds its texel and lane).
     Feature(u32),
     Alpha,
 }

@@ -5,15 +5,20 @@ use super::shader;
 use std::collections::HashMap;
 use std::sync::Mutex;
 
+/// The rasterizer's outputs: the channels four to a texel (shaders/rasterize.wgsl), and alpha
+/// with inverse depth. The formats of its `texture_storage_2d_array` declarations.
+pub(crate) const FEATURES_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub(crate) const AUX_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+
 #[derive(Clone, Copy)]
 pub(crate) enum Binding {
     Uniform,
     Storage {
         read_only: bool,
     },
-    /// Write-only r32float 2D array (the rasterizer's outputs).
-    OutputTexture,
-    /// An r32float 2D array read with `textureLoad` (the splat output, read by the refiner).
+    /// A write-only 2D array of this format (the rasterizer's outputs).
+    OutputTexture(wgpu::TextureFormat),
+    /// A float 2D array read with `textureLoad` (the splat output, read by the refiner).
     InputTexture,
     /// An unused binding number (entry points of one shader module share its numbering).
     Skip,
@@ -36,9 +41,9 @@ pub(crate) fn bind_group_layout(
                 Binding::Storage { read_only } => buffer(wgpu::BufferBindingType::Storage {
                     read_only: *read_only,
                 }),
-                Binding::OutputTexture => wgpu::BindingType::StorageTexture {
+                Binding::OutputTexture(format) => wgpu::BindingType::StorageTexture {
                     access: wgpu::StorageTextureAccess::WriteOnly,
-                    format: wgpu::TextureFormat::R32Float,
+                    format: *format,
                     view_dimension: wgpu::TextureViewDimension::D2Array,
                 },
                 Binding::InputTexture => wgpu::BindingType::Texture {
@@ -94,9 +99,9 @@ pub(crate) fn compute_pipeline(
 /// On a CPU adapter (lavapipe) a branch skips nothing: each SIMD row of 8 threads runs the loop
 /// body for every Gaussian with its lanes masked, and a load from memory costs far more than the
 /// arithmetic. So there each block of 8 threads walks only the Gaussians that reach one of its
-/// pixels (a bit mask per block, found once per batch), and up to four channels each thread shades
-/// 4 pixels and reuses every Gaussian it loads (with more channels the accumulators of several
-/// pixels no longer fit in registers). Measured on lavapipe, 150k Gaussians at 512² (`guava bench
+/// pixels (a bit mask per block, found once per batch), and each thread shades 4 pixels up to 16
+/// channels, 2 above, reusing every Gaussian it loads (more pixels' accumulators than that
+/// llvmpipe no longer keeps in registers). Measured on lavapipe, 150k Gaussians at 512² (`guava bench
 /// splat`, side by side with the layout before, which had no skipping and gave each thread pixels
 /// of a column spaced apart): rasterizing 32 channels ×0.51–0.53, 3 channels ×0.57–0.63; one pixel
 /// per thread rasterized 3 channels 1.35–2.4× slower than 4 (README, Performance).
@@ -104,7 +109,7 @@ pub(crate) fn compute_pipeline(
 pub enum RasterTuning {
     /// This many pixels per thread (1, 2, 4 or 8), every thread reading every batched Gaussian.
     Lockstep(u32),
-    /// CPU adapters: 4 pixels per thread up to four channels, 1 above, skipping Gaussians per block.
+    /// CPU adapters: 4 pixels per thread up to 16 channels, 2 above, skipping Gaussians per block.
     /// With `shuffles` each block is one subgroup whose 8 lanes load different words of a Gaussian
     /// and exchange them (shaders/rasterize_fetch_shuffles.wgsl): llvmpipe loads memory one lane
     /// at a time, so this cuts a Gaussian's loads 8-fold (rasterizing ×0.48–0.50 at 32 channels,
@@ -136,8 +141,12 @@ impl RasterTuning {
     pub fn pixels_per_thread(self, channels: u32) -> u32 {
         match self {
             Self::Lockstep(p) => p,
-            Self::Cpu { .. } if channels <= 4 => 4,
-            Self::Cpu { .. } => 1,
+            // Measured on lavapipe, 10k Gaussians at 512² (`guava bench splat`), rasterize time
+            // against 1 pixel a thread: 32 channels 0.67× at 2 pixels but 1.8× at 4 (llvmpipe no
+            // longer keeps 32 accumulators in registers); 64 channels 0.8× at 2; 8 and 16
+            // channels 0.5× at 4 (0.8–0.9× of 2).
+            Self::Cpu { .. } if channels <= 16 => 4,
+            Self::Cpu { .. } => 2,
         }
     }
 
@@ -328,8 +337,8 @@ impl SplatPipelines {
                 Storage { read_only: true },
                 Storage { read_only: true },
                 Storage { read_only: true },
-                Binding::OutputTexture,
-                Binding::OutputTexture,
+                Binding::OutputTexture(FEATURES_FORMAT),
+                Binding::OutputTexture(AUX_FORMAT),
             ],
         );
         let rig_layout = bind_group_layout(

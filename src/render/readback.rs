@@ -52,8 +52,9 @@ pub fn wait(device: &wgpu::Device) {
     }
 }
 
-/// All layers of an r32float 2D array texture as one f32 vector, layer-major ([L, H, W]).
-pub fn read_texture_layers(
+/// All layers of a float 2D array texture (r32float, rgba32float…) as one f32 vector, layer-major
+/// with the texel's channels innermost ([L, H, W, channels]).
+pub fn read_texture_floats(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     texture: &wgpu::Texture,
@@ -61,7 +62,7 @@ pub fn read_texture_layers(
     bytemuck::pod_collect_to_vec(&read_texture_bytes(device, queue, texture))
 }
 
-/// The texels of a texture with 4-byte texels (r32float, rgba8…), layer-major and row-major.
+/// The texels of a texture (r32float, rgba8, rgba32float…), layer-major and row-major.
 /// Rows are padded to wgpu's 256-byte copy alignment on the GPU and unpadded here.
 pub fn read_texture_bytes(
     device: &wgpu::Device,
@@ -74,7 +75,11 @@ pub fn read_texture_bytes(
         size.height as usize,
         size.depth_or_array_layers as usize,
     );
-    let row = w * 4;
+    let texel = texture
+        .format()
+        .block_copy_size(None)
+        .expect("a colour format") as usize;
+    let row = w * texel;
     let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
     let staging = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback::texture"),

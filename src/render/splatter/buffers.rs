@@ -6,9 +6,10 @@ use super::Splatter;
 use crate::camera::Camera;
 use crate::render::FeatureStorage;
 use crate::render::layout::{GpuGaussian, PROJECTED_SIZE};
+use crate::render::pipelines::{AUX_FORMAT, FEATURES_FORMAT};
 use crate::render::scan::{PrefixScan, entry};
 use crate::render::sort::{RadixSort, SortBuffers};
-use crate::render::splatter::{array_view, feature_bytes};
+use crate::render::splatter::{array_view, feature_bytes, feature_stride};
 
 /// Per-Gaussian buffers, sized by capacity.
 pub(super) struct CloudBuffers {
@@ -68,6 +69,7 @@ pub(super) fn output_texture(
     device: &wgpu::Device,
     label: &str,
     camera: &Camera,
+    format: wgpu::TextureFormat,
     layers: u32,
 ) -> wgpu::Texture {
     device.create_texture(&wgpu::TextureDescriptor {
@@ -80,7 +82,7 @@ pub(super) fn output_texture(
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::R32Float,
+        format,
         usage: wgpu::TextureUsages::STORAGE_BINDING
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC,
@@ -137,9 +139,19 @@ impl Splatter {
             tile_keys_tmp: storage(device, "Splat::tile_keys_tmp", pairs * 4),
             tile_vals_tmp: storage(device, "Splat::tile_vals_tmp", pairs * 4),
             ranges: storage(device, "Splat::tile_ranges", tx as u64 * ty as u64 * 8),
-            out_features: output_texture(device, "Splat::out_features", camera, channels),
-            out_aux: output_texture(device, "Splat::out_aux", camera, 2),
-            background: storage(device, "Splat::background", channels as u64 * 4),
+            out_features: output_texture(
+                device,
+                "Splat::out_features",
+                camera,
+                FEATURES_FORMAT,
+                feature_stride(channels) / 4,
+            ),
+            out_aux: output_texture(device, "Splat::out_aux", camera, AUX_FORMAT, 1),
+            background: storage(
+                device,
+                "Splat::background",
+                feature_stride(channels) as u64 * 4,
+            ),
         }
     }
 

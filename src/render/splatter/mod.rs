@@ -3,15 +3,15 @@
 //! rasterize into an encoder. Buffers are reused across frames and only reallocated when the cloud,
 //! the channel count, the resolution or the tile-pair count outgrows them.
 //!
-//! The output stays on the GPU: `features()` is an r32float texture array with one layer per channel
-//! (the reference's [C, H, W]) for the refiner and the present pass; `aux()` holds alpha (layer 0)
-//! and inverse depth (layer 1).
+//! The output stays on the GPU for the refiner and the present pass: `features()` is an
+//! rgba32float texture array holding the channels four to a texel (channel c in layer c / 4, lane
+//! c % 4); `aux()` is one rg32float layer of alpha and inverse depth.
 
 mod buffers;
 
 use super::layout::{FrameUniform, GpuGaussian, PROJECTED_SIZE};
 use super::pipelines::{FeatureStorage, SplatPipelines, dispatch_1d};
-use super::readback::{read_buffers, read_texture_layers};
+use super::readback::{read_buffers, read_texture_floats};
 use super::timing::StageTimer;
 use super::{RenderStats, SplatError, SplatImage};
 use crate::camera::Camera;
@@ -111,6 +111,20 @@ pub fn max_gaussians(limits: &wgpu::Limits, channels: u32, storage: FeatureStora
         .min(limits.max_buffer_size);
     let per_gaussian = feature_bytes(channels, storage).max(size_of::<GpuGaussian>() as u64);
     (max_binding / per_gaussian).min(u32::MAX as u64)
+}
+
+/// The first `channels` channels of texels of `lanes` channels each, layer-major as a texture
+/// array reads back ([L, H, W, lanes]; channel c in layer c / lanes, lane c % lanes), as planes
+/// ([C, H, W]).
+fn planes(texels: &[f32], lanes: usize, channels: usize) -> Vec<f32> {
+    let layers = channels.div_ceil(lanes);
+    let pixels = texels.len() / (layers * lanes).max(1);
+    (0..channels)
+        .flat_map(|c| {
+            let layer = &texels[c / lanes * pixels * lanes..][..pixels * lanes];
+            layer.iter().skip(c % lanes).step_by(lanes).copied()
+        })
+        .collect()
 }
 
 /// A view of every layer as a 2D array, also for single-layer textures (whose default view is 2D).
@@ -332,7 +346,10 @@ impl Splatter {
             channels,
         };
         queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
-        queue.write_buffer(&view.background, 0, bytemuck::cast_slice(background));
+        // Four to a word like the features, zero past the channels.
+        let mut padded = background.to_vec();
+        padded.resize(feature_stride(channels) as usize, 0.0);
+        queue.write_buffer(&view.background, 0, bytemuck::cast_slice(&padded));
         self.camera = Some(*camera);
     }
 
@@ -421,12 +438,13 @@ impl Splatter {
         true
     }
 
-    /// The C feature layers (r32float, [C, H, W]), on the GPU.
+    /// The C channels four to a texel (rgba32float, ⌈C/4⌉ layers; channel c in layer c / 4, lane
+    /// c % 4), on the GPU.
     pub fn features(&self) -> Option<&wgpu::Texture> {
         self.view.as_ref().map(|v| &v.out_features)
     }
 
-    /// Alpha layer then inverse-depth layer (r32float, [2, H, W]), on the GPU.
+    /// Alpha and inverse depth (rg32float, one layer), on the GPU.
     pub fn aux(&self) -> Option<&wgpu::Texture> {
         self.view.as_ref().map(|v| &v.out_aux)
     }
@@ -443,18 +461,24 @@ impl Splatter {
     /// Copies the output to the CPU (waits for the GPU).
     pub fn read_image(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Option<SplatImage> {
         let v = self.view.as_ref()?;
-        let pixels = v.width as usize * v.height as usize;
-        let features = read_texture_layers(device, queue, &v.out_features);
-        let mut aux = read_texture_layers(device, queue, &v.out_aux);
-        let inv_depth = aux.split_off(pixels);
+        let features = read_texture_floats(device, queue, &v.out_features);
+        let [alpha, inv_depth] = self.read_aux(device, queue)?;
         Some(SplatImage {
             width: v.width,
             height: v.height,
             channels: v.channels as usize,
-            features,
-            alpha: aux,
+            features: planes(&features, 4, v.channels as usize),
+            alpha,
             inv_depth,
         })
+    }
+
+    /// Copies alpha and inverse depth to the CPU, each [H, W] (waits for the GPU).
+    pub fn read_aux(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Option<[Vec<f32>; 2]> {
+        let aux = read_texture_floats(device, queue, &self.view.as_ref()?.out_aux);
+        let mut planes = planes(&aux, 2, 2);
+        let inv_depth = planes.split_off(aux.len() / 2);
+        Some([planes, inv_depth])
     }
 
     /// GPU memory held: (bytes per Gaussian of capacity, bytes per tile pair of capacity, the rest).
@@ -471,7 +495,7 @@ impl Splatter {
             pair_capacity: self.view.as_ref().map_or(0, |v| v.pair_capacity as u64),
             bytes_per_pair: 16,
             image_bytes: self.view.as_ref().map_or(0, |v| {
-                v.width as u64 * v.height as u64 * (v.channels as u64 + 2) * 4
+                v.width as u64 * v.height as u64 * (feature_stride(v.channels) as u64 + 2) * 4
             }),
         }
     }
