@@ -187,6 +187,7 @@ enum Bench {
     Fidelity(bench::FidelityBenchArgs),
     /// The default refiner on held-out pairs (raw against refined, each against the truth),
     /// and what refining costs per frame.
+    #[command(alias = "refine")]
     Refiner(bench::RefinerBenchArgs),
 }
 
