@@ -100,8 +100,8 @@ pub(crate) fn compute_pipeline(
 /// body for every Gaussian with its lanes masked, and a load from memory costs far more than the
 /// arithmetic. So there each block of 8 threads walks only the Gaussians that reach one of its
 /// pixels (a bit mask per block, found once per batch), and each thread shades 4 pixels up to 16
-/// channels, 2 above, reusing every Gaussian it loads (more pixels' accumulators than that
-/// llvmpipe no longer keeps in registers). Measured on lavapipe, 150k Gaussians at 512² (`guava bench
+/// channels, 2 above, reusing every Gaussian it loads (with more, llvmpipe no longer keeps the
+/// accumulators in registers). Measured on lavapipe, 150k Gaussians at 512² (`guava bench
 /// splat`, side by side with the layout before, which had no skipping and gave each thread pixels
 /// of a column spaced apart): rasterizing 32 channels ×0.51–0.53, 3 channels ×0.57–0.63; one pixel
 /// per thread rasterized 3 channels 1.35–2.4× slower than 4 (README, Performance).
