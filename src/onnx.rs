@@ -107,8 +107,16 @@ impl OnnxRuntime {
         // ort panics (instead of returning an error) on some dlopen failures: contain that here.
         let env = catch_unwind(AssertUnwindSafe(|| -> Result<_, String> {
             let builder = ort::init_from(path).map_err(|e| e.to_string())?;
+            // One pool of threads for every session, idle threads sleeping: with a pool per
+            // session, spinning after each run (ONNX Runtime's default), the seven keypoint
+            // models of a video frame took each other's cores, and the pose model ran at half
+            // its speed; spinning also took the CPU a viewer frame (lavapipe) needs.
+            let threads = ort::environment::GlobalThreadPoolOptions::default()
+                .with_spin_control(false)
+                .map_err(|e| e.to_string())?;
             builder
                 .with_name("guava")
+                .with_global_thread_pool(threads)
                 .build()
                 .map_err(|e| e.to_string())
         }))

@@ -36,15 +36,21 @@ pub struct PointPoser {
 impl PointPoser {
     pub fn new<'a>(body: &BodyModel, points: impl IntoIterator<Item = &'a Landmark>) -> Self {
         let points: Vec<&Landmark> = points.into_iter().collect();
-        // Which targets move each vertex the points use, and by how much.
-        let mut moved: BTreeMap<u32, Vec<(usize, Vec3)>> = points
-            .iter()
-            .flat_map(|p| p.vertices.iter().map(|&v| (v, Vec::new())))
-            .collect();
+        // Which targets move each vertex the points use, and by how much: a slot per used
+        // vertex, found through a table over all vertices (the targets hold ~10⁵ deltas, and
+        // a map lookup for each took a few milliseconds a fit; a video fits every frame).
+        let mut slot = vec![u32::MAX; body.vertices.len()];
+        let mut moved: Vec<Vec<(usize, Vec3)>> = Vec::new();
+        for &v in points.iter().flat_map(|p| &p.vertices) {
+            if slot[v as usize] == u32::MAX {
+                slot[v as usize] = moved.len() as u32;
+                moved.push(Vec::new());
+            }
+        }
         for (t, target) in body.targets.iter().enumerate() {
             for (v, &d) in target.vertices.iter().zip(&target.deltas) {
-                if let Some(list) = moved.get_mut(v) {
-                    list.push((t, d));
+                if let Some(&k) = slot.get(*v as usize).filter(|&&k| k != u32::MAX) {
+                    moved[k as usize].push((t, d));
                 }
             }
         }
@@ -66,7 +72,7 @@ impl PointPoser {
                         });
                         share.weight += w * s;
                         share.rest += w * s * body.vertices[v as usize];
-                        for &(t, d) in &moved[&v] {
+                        for &(t, d) in &moved[slot[v as usize] as usize] {
                             match share.deltas.iter_mut().find(|(k, _)| *k == t) {
                                 Some((_, sum)) => *sum += w * s * d,
                                 None => share.deltas.push((t, w * s * d)),
