@@ -24,4 +24,6 @@ pub mod reconstruct;
 pub mod refine;
 pub mod render;
 pub mod synthetic;
+pub mod track;
 pub mod tracking;
+pub mod video;
