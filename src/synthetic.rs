@@ -10,6 +10,7 @@ use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, vertex_normals};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
 use crate::photo::SOURCE_SIZE;
 use crate::raster::{Fragments, rasterize};
+use crate::tracking::SourceView;
 
 /// A smooth colour pattern over the rest surface: bands with periods of 0.6–1 m, so a 512²
 /// texture resolves it and an exact reconstruction can match it closely.
@@ -36,6 +37,81 @@ pub fn upper_body_camera(body: &BodyModel, yaw: f32) -> Camera {
         SOURCE_SIZE,
         GUAVA_INVTANFOV,
     )
+}
+
+/// A talking-head video's camera: GUAVA's (512²) looking at the body's neck from the front, `yaw`
+/// radians around it, with 1.1 m of height in view (the head whole, the arms to the elbows at
+/// rest, a forearm raised to wave).
+pub fn portrait_camera(body: &BodyModel, yaw: f32) -> Camera {
+    let neck = body
+        .joint_index("neck01")
+        .map_or(Vec3::new(0.0, 1.45, 0.0), |j| body.joints[j].rest);
+    let target = Vec3::new(0.0, neck.y - 0.05, 0.0);
+    let distance = 1.1 * GUAVA_INVTANFOV / 2.0;
+    let eye = target + distance * Vec3::new(yaw.sin(), 0.0, yaw.cos());
+    Camera::guava(
+        Camera::look_at(eye, target, Vec3::Y),
+        SOURCE_SIZE,
+        GUAVA_INVTANFOV,
+    )
+}
+
+/// The body posed by `pose`, seen by `camera` at its size, plainly lit ([`shaded`]: skin, eyes
+/// and mouth in flat colours, lit from the body's front, on grey), drawn twice as fine and
+/// box-filtered: a photo the keypoint models take for a person (faces included), for tests of
+/// fitting and tracking whose answer is `pose`.
+pub fn shaded_photo(
+    body: &BodyModel,
+    pose: &BodyPose,
+    camera: &Camera,
+) -> Result<RgbaImage, PoseError> {
+    let mut posed = PosedBody::default();
+    body.pose(pose, &mut posed)?;
+    let side = camera.width;
+    let fine = camera.scaled(2.0);
+    let fragments = rasterize(&posed.vertices, &body.triangles, &fine);
+    let rgb = shaded(body, &posed.vertices, &fragments, Vec3::Z, 2);
+    Ok(RgbaImage::from_fn(side, camera.height, |x, y| {
+        let i = 3 * (y * side + x) as usize;
+        let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+        Rgba([q(rgb[i]), q(rgb[i + 1]), q(rgb[i + 2]), 255])
+    }))
+}
+
+/// A synthetic video with known answers: `count` frames at `fps` of the embedded demo motion
+/// from `start` seconds, the body drawn by [`shaded_photo`] through [`portrait_camera`]; the
+/// frames and each frame's true view (pose and camera).
+pub fn demo_motion_clip(
+    body: &BodyModel,
+    start: f64,
+    count: usize,
+    fps: f32,
+) -> Result<(Vec<crate::video::VideoFrame>, Vec<SourceView>), PoseError> {
+    let demo = crate::tracking::demo_motion().expect("the embedded demo motion is valid");
+    let retarget = crate::tracking::Retarget::new(&demo, body);
+    let camera = portrait_camera(body, 0.0);
+    (0..count)
+        .map(|i| {
+            let time_s = i as f64 / f64::from(fps);
+            let mut pose = BodyPose::rest(body);
+            retarget.sample(&demo, start + time_s, &mut pose);
+            let pixels = shaded_photo(body, &pose, &camera)?;
+            let view = SourceView {
+                pose,
+                camera,
+                crop: None,
+            };
+            Ok((
+                crate::video::VideoFrame {
+                    index: i,
+                    time_s,
+                    pixels,
+                },
+                view,
+            ))
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map(|pairs| pairs.into_iter().unzip())
 }
 
 /// The body posed by `pose`, seen by `camera`, coloured by `colour` of each pixel's rest-surface

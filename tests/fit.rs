@@ -954,7 +954,6 @@ struct DrawnWave {
 impl DrawnWave {
     fn new() -> Self {
         use guava::camera::{Camera, GUAVA_INVTANFOV};
-        use guava::raster::rasterize;
         use guava::tracking::{Retarget, Tracking};
         let body = BodyModel::default_body().expect("body");
         let demo = Tracking::load(&data("assets/demo_motion.json")).expect("demo motion");
@@ -966,19 +965,8 @@ impl DrawnWave {
         let target = Vec3::new(-0.15, neck.y, 0.0);
         let eye = target + 1.6 * GUAVA_INVTANFOV / 2.0 * Vec3::Z;
         let view = Camera::look_at(eye, target, Vec3::Y);
-        // Drawn at twice the size and box-filtered.
-        let s = 2;
-        let fragments = rasterize(
-            &posed.vertices,
-            &body.triangles,
-            &Camera::guava(view, 512 * s, GUAVA_INVTANFOV),
-        );
-        let rgb = synthetic::shaded(&body, &posed.vertices, &fragments, Vec3::Z, s as usize);
-        let drawn = image::RgbaImage::from_fn(512, 512, |x, y| {
-            let i = 3 * (y * 512 + x) as usize;
-            let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-            image::Rgba([q(rgb[i]), q(rgb[i + 1]), q(rgb[i + 2]), 255])
-        });
+        let camera = Camera::guava(view, 512, GUAVA_INVTANFOV);
+        let drawn = synthetic::shaded_photo(&body, &pose, &camera).expect("drawn");
         // The committed picture is this one, give or take a rounding step where another
         // machine's maths differs in the last bits.
         let committed = image::open(data("tests/data/drawn_wave.png"))
@@ -996,7 +984,7 @@ impl DrawnWave {
         let source =
             guava::photo::SourceImage::from_rgba(&committed, false, "drawn body").expect("source");
         Self {
-            camera: Camera::guava(view, 512, GUAVA_INVTANFOV),
+            camera,
             body,
             posed,
             source,

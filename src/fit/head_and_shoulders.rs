@@ -93,12 +93,13 @@ pub fn contradicts(keypoints: &[Keypoint], face: &FaceLandmarks) -> Option<Strin
 }
 
 /// The COCO head and shoulder keypoints of `face` (source pixels of a `side`² image), the
-/// shoulders at the height the body's proportions give below the eyes, inside `mask`'s outline
-/// there (`side`², the person ≥ ½); `None` when the body or the face mesh lacks the points.
+/// shoulders at the height the body's proportions give below the eyes, inside the person
+/// mask's outline there (`mask` at a pixel's centre, the person ≥ ½; only that row is read);
+/// `None` when the body or the face mesh lacks the points.
 pub fn keypoints_from_face(
     body: &BodyModel,
     face: &FaceLandmarks,
-    mask: &[f32],
+    mask: impl Fn(Vec2) -> f32,
     side: u32,
 ) -> Option<Vec<Keypoint>> {
     let proportions = Proportions::of(body)?;
@@ -114,7 +115,7 @@ pub fn keypoints_from_face(
     // sit inside its run under the face; where the mask has no person there (the pose model's
     // segmentation failed with its points), as far apart as the body's proportions say.
     let row = (y.max(0.0) as usize).min(size - 1);
-    let inside = |x: usize| mask[row * size + x] >= 0.5;
+    let inside = |x: usize| mask(Vec2::new(x as f32 + 0.5, row as f32 + 0.5)) >= 0.5;
     let centre = (eyes.x.max(0.0) as usize).min(size - 1);
     let (middle, half) = if inside(centre) {
         let left_edge = (0..centre).rev().find(|&x| !inside(x)).map_or(0, |x| x + 1);

@@ -36,7 +36,8 @@ pub use hand::{BodyPoint, hand_targets};
 pub use report::{FaceFitReport, FitReport, GazeFitReport, HandFitReport};
 pub use silhouette::{SilhouetteReport, fit_silhouette};
 
-use problem::{Stage, State, Target, Unknown, camera_for};
+pub use problem::{FitState, camera_for};
+use problem::{Stage, Target, Unknown};
 use unknowns::{
     face_joints, face_shapes, fitted_expressions, joint_unknowns, relaxed_pose, root_and_camera,
 };
@@ -121,6 +122,9 @@ pub const EXPRESSION_PRIOR_PER_EYE_SPAN: f64 = 0.03;
 pub const MIN_PRESENCE: f32 = 0.5;
 /// Keypoints the model is less sure of are left out.
 pub const MIN_CONFIDENCE: f32 = 0.5;
+/// In a video's later frames points fade in from this confidence on (full weight at
+/// 2·[`MIN_CONFIDENCE`] − this).
+const WARM_CONFIDENCE: f32 = 0.3;
 /// Hand points count like face points; finger joints turned by 1 rad cost as much as a point off
 /// by this fraction of the palm (wrist to middle knuckle), so the prior scales with the hand.
 const HAND_POINT_WEIGHT: f64 = 0.5;
@@ -139,6 +143,27 @@ const GAZE_PRIOR_PER_EYE_SPAN: f64 = 0.02;
 /// mean of the truth (tests/fit.rs) and the cameraman's legs still hang from where his hips are.
 const HIP_WEIGHT: f64 = 0.25;
 const ITERATIONS: usize = 30;
+/// A video frame's fit starts where the last one ended: a few iterations a stage suffice.
+const WARM_ITERATIONS: usize = 6;
+/// How strongly a video frame's fit is pulled to the last frame's values (at 30 fps; the
+/// tracker scales them by its frame rate): a joint turned by 1 rad since then costs as much as
+/// a keypoint this many pixels off, …
+const TEMPORAL_PX_PER_RAD: f64 = 40.0;
+/// … the camera moved as much as this share of the pixels a sideways move shifts the body by,
+/// …
+const TEMPORAL_CAMERA_SHARE: f64 = 0.5;
+/// … a face unit changed by 1 as much as a face point off by this fraction of the eye span, an
+/// eye turned by 1 rad this fraction, and a finger joint turned by 1 rad this fraction of the
+/// palm.
+const TEMPORAL_EXPRESSION_PER_EYE_SPAN: f64 = 0.3;
+const TEMPORAL_GAZE_PER_EYE_SPAN: f64 = 0.1;
+const TEMPORAL_FINGER_PER_PALM: f64 = 0.3;
+/// In a video, the root and the torso's joints are also pulled to their first frame's turn: a
+/// turn of 1 rad from it costs as much as a keypoint this many pixels off.
+const ANCHOR_PX_PER_RAD: f64 = 25.0;
+/// The torso's joints the anchor holds (besides the root).
+const TORSO_JOINTS: [&str; 1] = ["spine03"];
+
 /// Starting depths of the body stage, as factors of the shoulder-width estimate.
 const BODY_START_DEPTHS: [f32; 3] = [0.85, 1.0, 1.2];
 
@@ -167,32 +192,7 @@ pub fn fit_detections(
     face_model: &mut FaceLandmarker,
     side: u32,
 ) -> Result<(SourceView, FitReport), FitError> {
-    // Without a body from the pose model (no person, or points that contradict the face: a
-    // photo framed tighter than GUAVA's), the head and shoulders from the face mesh and the
-    // person mask, or no fit.
-    let presence = detections.pose.presence;
-    let no_body = if presence.is_nan() || presence < MIN_PRESENCE {
-        Some(format!("the pose model's presence is {presence:.2}"))
-    } else {
-        detections
-            .face
-            .as_ref()
-            .and_then(|face| head_and_shoulders::contradicts(&detections.pose.keypoints, face))
-    };
-    let from_face = match &no_body {
-        Some(_) => {
-            let points = detections.face.as_ref().and_then(|face| {
-                head_and_shoulders::keypoints_from_face(
-                    body,
-                    face,
-                    &detections.pose.mask_at(side as usize),
-                    side,
-                )
-            });
-            Some(points.ok_or(FitError::NoPerson { presence })?)
-        }
-        None => None,
-    };
+    let (keypoints, no_body) = body_keypoints(body, detections, side)?;
     let embedding = detections
         .face
         .as_ref()
@@ -205,7 +205,7 @@ pub fn fit_detections(
         _ => None,
     };
     let input = FitInput {
-        keypoints: from_face.as_deref().unwrap_or(&detections.pose.keypoints),
+        keypoints: &keypoints,
         face,
         hands: &detections.hands,
         irises: &detections.irises,
@@ -214,6 +214,60 @@ pub fn fit_detections(
     report.face_skipped = embedding.err();
     report.body_from_face = no_body;
     Ok((view, report))
+}
+
+/// The body keypoints a fit uses of what the models found on a photo (or a video's frame): the
+/// pose model's, or — when it sees no person, or its points contradict the face (a photo framed
+/// tighter than GUAVA's: a face close up, where the pose model put the shoulders beside the
+/// nose) — the head's and shoulders' from the face mesh and the person mask; with why the pose
+/// model's were not used. No face then: no fit.
+pub fn body_keypoints<'a>(
+    body: &BodyModel,
+    detections: &'a Detections,
+    side: u32,
+) -> Result<(std::borrow::Cow<'a, [Keypoint]>, Option<String>), FitError> {
+    let presence = detections.pose.presence;
+    let no_body = if presence.is_nan() || presence < MIN_PRESENCE {
+        Some(format!("the pose model's presence is {presence:.2}"))
+    } else {
+        detections
+            .face
+            .as_ref()
+            .and_then(|face| head_and_shoulders::contradicts(&detections.pose.keypoints, face))
+    };
+    let from_face = || {
+        detections.face.as_ref().and_then(|face| {
+            head_and_shoulders::keypoints_from_face(
+                body,
+                face,
+                |pixel| detections.pose.mask_value(pixel),
+                side,
+            )
+        })
+    };
+    let Some(why) = no_body else {
+        // A shoulder the pose model is unsure of (below the frame's edge in a head and
+        // shoulders shot: a third of such a video's frames) is placed from the face, as the
+        // whole body is when the pose model sees none.
+        let pose = &detections.pose.keypoints;
+        let unsure = |k: &Keypoint| k.name.ends_with("_shoulder") && k.confidence < MIN_CONFIDENCE;
+        if pose.iter().any(unsure)
+            && let Some(face) = from_face()
+        {
+            let points = pose
+                .iter()
+                .map(|k| match unsure(k) {
+                    true => *face.iter().find(|f| f.name == k.name).unwrap_or(k),
+                    false => *k,
+                })
+                .collect::<Vec<_>>();
+            let why = "the pose model was unsure of a shoulder: placed from the face".into();
+            return Ok((points.into(), Some(why)));
+        }
+        return Ok((pose.as_slice().into(), None));
+    };
+    let points = from_face().ok_or(FitError::NoPerson { presence })?;
+    Ok((points.into(), Some(why)))
 }
 
 /// [`fit_detections`] for GUAVA's body: fits EHM's linear form ([`EhmModel::linearised`]) and
@@ -261,6 +315,23 @@ impl<'a> FitInput<'a> {
     }
 }
 
+/// How a fit starts.
+#[derive(Clone, Copy, Debug)]
+pub enum Start<'a> {
+    /// A photo: from rest, from several starting depths, the shape free.
+    Cold,
+    /// The next frame of a video: from the last frame's state, the identity (shape, head shape,
+    /// the facial features' offsets) kept, [`WARM_ITERATIONS`] a stage, every unknown pulled
+    /// to where it was at `temporal` times the [`TEMPORAL_PX_PER_RAD`] family of weights, and
+    /// the torso's turn to where the video's first frame (`anchor`) had it
+    /// ([`ANCHOR_PX_PER_RAD`]).
+    Warm {
+        previous: &'a FitState,
+        anchor: &'a FitState,
+        temporal: f64,
+    },
+}
+
 /// Fits the default body to what `input` holds (body keypoints; the face mesh and hands when
 /// given) in a `side`² image seen by GUAVA's camera; returns the source view (pose and camera)
 /// for reconstruction.
@@ -269,18 +340,75 @@ pub fn fit_keypoints(
     input: &FitInput,
     side: u32,
 ) -> Result<(SourceView, FitReport), FitError> {
+    let (state, report) = fit_from(body, input, side, Start::Cold)?;
+    let view = SourceView {
+        camera: state.camera(side),
+        pose: state.pose,
+        crop: None,
+    };
+    Ok((view, report))
+}
+
+/// The fit of a video's next frame, started from the last one's `previous` state, its torso
+/// held near the first frame's `anchor` ([`Start::Warm`]); `temporal` scales the pull towards
+/// the last frame (1 at 30 frames a second).
+pub fn fit_frame(
+    body: &BodyModel,
+    input: &FitInput,
+    side: u32,
+    previous: &FitState,
+    anchor: &FitState,
+    temporal: f64,
+) -> Result<(FitState, FitReport), FitError> {
+    let start = Start::Warm {
+        previous,
+        anchor,
+        temporal,
+    };
+    fit_from(body, input, side, start)
+}
+
+/// [`fit_keypoints`] and [`fit_frame`]: the body, face, gaze and hand stages from `start`.
+fn fit_from(
+    body: &BodyModel,
+    input: &FitInput,
+    side: u32,
+    start: Start,
+) -> Result<(FitState, FitReport), FitError> {
     let (keypoints, face) = (input.keypoints, input.face);
     let landmark = |name: &str| body.landmarks.iter().position(|l| l.name == name);
     let mut observations = Vec::new();
     let mut names = Vec::new();
     let mut surface = Vec::new();
-    for k in keypoints.iter().filter(|k| k.confidence >= MIN_CONFIDENCE) {
+    // A video's later frames leave out the lower body's points: in an upper-body video the
+    // pose model guesses the hips, knees and ankles at the frame's lower edge, confidently,
+    // and frame after frame they drew the camera away (the first frame's silhouette stage,
+    // which sets the torso's length, is not run again).
+    let warm_start = matches!(start, Start::Warm { .. });
+    let lower_body = |name: &str| {
+        ["_hip", "_knee", "_ankle"]
+            .iter()
+            .any(|end| name.ends_with(end))
+    };
+    // A photo's points count from MIN_CONFIDENCE on. A video's fade in between
+    // WARM_CONFIDENCE and MIN_CONFIDENCE + that span: a point whose confidence wavers about
+    // the threshold (an elbow at the frame's edge) would otherwise come and go, and the arm
+    // jump with it.
+    let fade = |confidence: f32| match warm_start {
+        true => ((confidence - WARM_CONFIDENCE) / (2.0 * (MIN_CONFIDENCE - WARM_CONFIDENCE)))
+            .clamp(0.0, 1.0),
+        false => f32::from(u8::from(confidence >= MIN_CONFIDENCE)),
+    };
+    let used = keypoints
+        .iter()
+        .filter(|k| fade(k.confidence) > 0.0 && !(warm_start && lower_body(k.name)));
+    for k in used {
         let l = landmark(k.name).ok_or_else(|| FitError::MissingOnBody(k.name.into()))?;
         let weight = if k.name.ends_with("_hip") {
             HIP_WEIGHT
         } else {
             1.0
-        };
+        } * f64::from(fade(k.confidence));
         observations.push((
             Target::Point(l),
             k.pixel,
@@ -321,7 +449,7 @@ pub fn fit_keypoints(
     let unseen_arms = ["left", "right"]
         .map(|side| !has(&format!("{side}_elbow")) && !has(&format!("{side}_wrist")));
     let relaxed = relaxed_pose(body, unseen_arms);
-    let start_at = |depth: f32| State {
+    let start_at = |depth: f32| FitState {
         feature_offsets: [Vec2::ZERO; FACE_FEATURES.len()],
         pose: relaxed.clone(),
         camera: Vec3::new(
@@ -330,7 +458,53 @@ pub fn fit_keypoints(
             depth + m3.z,
         ),
     };
+    let (warm, iterations) = match start {
+        Start::Cold => (None, ITERATIONS),
+        Start::Warm {
+            previous,
+            anchor,
+            temporal,
+        } => (Some((previous, anchor, temporal)), WARM_ITERATIONS),
+    };
+    // The camera's depth: estimated from the shoulders, or where the last frame had it.
+    let depth = warm.map_or(depth, |(previous, ..)| previous.camera.z.max(1e-3));
     let camera_step = 1e-4 * depth as f64;
+    // Each unknown with where the last frame had it and its pull there (`weight` per unit).
+    // The torso's turn is also pulled to the first frame's: with the hips out of the frame and
+    // the shoulders at its edge, turning the torso and turning the head back the other way
+    // explain a turned face alike, and the demo video's torso drifted 130° in 50 frames. Two
+    // pulls on one unknown are one pull to their weighted mean (the same least squares).
+    let anchored = |u: Unknown| match u {
+        Unknown::Joint(j, _) => {
+            j == 0 || TORSO_JOINTS.iter().any(|n| body.joint_index(n) == Some(j))
+        }
+        _ => false,
+    };
+    let pull = |unknowns: &[(Unknown, f64)], weight: &dyn Fn(Unknown) -> f64| match warm {
+        Some((previous, anchor, temporal)) => unknowns
+            .iter()
+            .map(|&(u, _)| {
+                let (last, w) = (previous.get(u), temporal * weight(u));
+                match anchored(u) {
+                    true => {
+                        let (first, a) = (anchor.get(u), ANCHOR_PX_PER_RAD);
+                        let total = w * w + a * a;
+                        ((w * w * last + a * a * first) / total, total.sqrt())
+                    }
+                    false => (last, w),
+                }
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    let (focal64, depth64) = (f64::from(focal), f64::from(depth));
+    // The camera's depth moves the body's points far less than a sideways move does, but a
+    // person's distance changes as little between frames, and the keypoints alone leave it
+    // loose: it has the same pull.
+    let joint_or_camera = |u: Unknown| match u {
+        Unknown::Camera(_) => TEMPORAL_CAMERA_SHARE * focal64 / depth64,
+        _ => TEMPORAL_PX_PER_RAD,
+    };
 
     // The body's landmarks first, then the face points, then the fingertips, all posed by one
     // poser.
@@ -378,17 +552,22 @@ pub fn fit_keypoints(
             "lowerleg01.R" => Some("right_ankle"),
             _ => None,
         };
+        // In a video's later frames the legs stay as its first frame fitted them.
         if far_end.is_some_and(|k| !has(k)) {
             continue;
         }
         let j = joint(name)?;
         unknowns.extend(joint_unknowns(body, j));
     }
-    unknowns.extend(
-        body.targets_in(TargetGroup::Shape)
-            .map(|(i, t)| (Unknown::Coefficient(i, t.range), SHAPE_PRIOR_PX)),
-    );
+    // The shape is the person's: fitted on a photo (or a video's first frame) and kept.
+    if warm.is_none() {
+        unknowns.extend(
+            body.targets_in(TargetGroup::Shape)
+                .map(|(i, t)| (Unknown::Coefficient(i, t.range), SHAPE_PRIOR_PX)),
+        );
+    }
     let body_observed = observations.len();
+    let temporal = pull(&unknowns, &joint_or_camera);
     let mut stage = Stage {
         body,
         side,
@@ -396,9 +575,11 @@ pub fn fit_keypoints(
         observations,
         unknowns,
         antagonists: Vec::new(),
+        temporal,
+        iterations,
         features: vec![None; body_observed],
         pixels: Vec::new(),
-        base: start_at(depth),
+        base: warm.map_or_else(|| start_at(depth), |(previous, ..)| previous.clone()),
         relaxed: relaxed.clone(),
         points: Vec::new(),
         joints: Vec::new(),
@@ -406,15 +587,23 @@ pub fn fit_keypoints(
     // The body stage has several minima (a broad suit's shoulders fit a short, large-headed body
     // too), and which one a single start reaches changes with the last bits of the keypoints or
     // of the maths library: start from several depths around the shoulder-width estimate and
-    // keep the best.
+    // keep the best. A video's next frame starts where the last one ended.
     let (mut best, mut iterations) = ((stage.base.clone(), f64::INFINITY), 0);
-    for factor in BODY_START_DEPTHS {
+    let starts: &[f32] = match warm {
+        Some(_) => &[],
+        None => &BODY_START_DEPTHS,
+    };
+    for factor in starts {
         stage.base = start_at(factor * depth);
         let (state, used, cost) = stage.solve(camera_step);
         iterations += used;
         if cost < best.1 {
             best = (state, cost);
         }
+    }
+    if warm.is_some() {
+        let (state, used, _) = stage.solve(camera_step);
+        (best.0, iterations) = (state, used);
     }
     let mut result = best.0;
 
@@ -439,6 +628,13 @@ pub fn fit_keypoints(
         for j in face_joints(body)? {
             unknowns.extend(joint_unknowns(body, j));
         }
+        // In a video's later frames the head's size is known (the first frame fitted it), and
+        // its ~100 face points say how far the person is better than the body stage's few
+        // points: the camera moves here too. (On a photo the head's size and the camera's
+        // distance would trade off.)
+        if warm.is_some() {
+            unknowns.extend((0..3).map(|k| (Unknown::Camera(k), 0.0)));
+        }
         let eye_span =
             landmarks.points[FACE_EYE_CORNERS.0].distance(landmarks.points[FACE_EYE_CORNERS.1]);
         let expression_prior = EXPRESSION_PRIOR_PER_EYE_SPAN * eye_span as f64;
@@ -448,15 +644,24 @@ pub fn fit_keypoints(
                 expression_prior,
             )
         }));
-        unknowns.extend(face_shapes(body).map(|t| {
-            (
-                Unknown::Coefficient(t, body.targets[t].range),
-                SHAPE_PRIOR_PX,
-            )
-        }));
-        for g in 0..FACE_FEATURES.len() {
-            unknowns.extend((0..2).map(|k| (Unknown::FeatureOffset(g, k), FEATURE_OFFSET_PRIOR)));
+        // The head's shape and the features' offsets are the person's (identity).
+        if warm.is_none() {
+            unknowns.extend(face_shapes(body).map(|t| {
+                (
+                    Unknown::Coefficient(t, body.targets[t].range),
+                    SHAPE_PRIOR_PX,
+                )
+            }));
+            for g in 0..FACE_FEATURES.len() {
+                unknowns
+                    .extend((0..2).map(|k| (Unknown::FeatureOffset(g, k), FEATURE_OFFSET_PRIOR)));
+            }
         }
+        let expression_pull = TEMPORAL_EXPRESSION_PER_EYE_SPAN * eye_span as f64;
+        stage.temporal = pull(&unknowns, &|u| match u {
+            Unknown::Coefficient(..) => expression_pull,
+            u => joint_or_camera(u),
+        });
         stage.unknowns = unknowns;
         let weight = ANTAGONIST_PER_EYE_SPAN * eye_span as f64;
         stage.antagonists = ANTAGONISTS
@@ -486,6 +691,7 @@ pub fn fit_keypoints(
                 stage.projected(&body_only, face_range)
             },
             surface: embedding.points.clone(),
+            feature_offsets: with_face.feature_offsets,
         });
         result = with_face;
     }
@@ -516,6 +722,8 @@ pub fn fit_keypoints(
             // the turn about the line of sight moves no pupil.
             unknowns.extend((0..2).map(|k| (Unknown::Joint(j, k), prior)));
         }
+        let gaze_pull = TEMPORAL_GAZE_PER_EYE_SPAN * eye_span as f64;
+        stage.temporal = pull(&unknowns, &|_| gaze_pull);
         stage.unknowns = unknowns;
         stage.antagonists.clear();
         stage.base = result.clone();
@@ -545,7 +753,7 @@ pub fn fit_keypoints(
     if !input.hands.is_empty() {
         let start = stage.observations.len();
         let mut tip = body.landmarks.len() + face_points.len();
-        let mut unknowns = Vec::new();
+        let (mut unknowns, mut temporal) = (Vec::new(), Vec::new());
         for (h, targets) in input.hands.iter().zip(&hand_targets) {
             for (t, &p) in targets.iter().zip(&h.points) {
                 let target = match t {
@@ -559,11 +767,16 @@ pub fn fit_keypoints(
                 stage.features.push(None);
             }
             let palm = h.points[0].distance(h.points[9]).max(1.0) as f64;
+            let first = unknowns.len();
             for j in hand::hand_joints(body, h.side)? {
                 let prior = FINGER_PRIOR_PER_PALM * palm;
                 unknowns.extend((0..3).map(|k| (Unknown::Joint(j, k), prior)));
             }
+            temporal.extend(pull(&unknowns[first..], &|_| {
+                TEMPORAL_FINGER_PER_PALM * palm
+            }));
         }
+        stage.temporal = temporal;
         stage.unknowns = unknowns;
         stage.antagonists.clear();
         stage.base = result.clone();
@@ -606,12 +819,5 @@ pub fn fit_keypoints(
         hands: hands_report,
         gaze: gaze_report,
     };
-    Ok((
-        SourceView {
-            pose: result.pose,
-            camera: camera_for(result.camera, side),
-            crop: None,
-        },
-        report,
-    ))
+    Ok((result, report))
 }

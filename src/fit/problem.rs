@@ -4,12 +4,12 @@
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use super::{FACE_FEATURES, ITERATIONS, lm};
+use super::{FACE_FEATURES, lm};
 use crate::body::{BodyModel, BodyPose, PointPoser};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
 
 /// The camera looking at the body's front (+z) from +z: x right on the body's left, y down.
-pub(super) fn camera_for(translation: Vec3, side: u32) -> Camera {
+pub fn camera_for(translation: Vec3, side: u32) -> Camera {
     let flip = Mat4::from_diagonal(Vec4::new(1.0, -1.0, -1.0, 1.0));
     Camera::guava(
         Mat4::from_translation(translation) * flip,
@@ -38,15 +38,33 @@ pub(super) enum Target {
     Joint(usize),
 }
 
-/// A pose and camera as the fit holds them, with the face's feature offsets.
-#[derive(Clone)]
-pub(super) struct State {
-    pub(super) pose: BodyPose,
-    pub(super) camera: Vec3,
-    pub(super) feature_offsets: [Vec2; FACE_FEATURES.len()],
+/// A pose and camera as the fit holds them, with the face's feature offsets: where a fit ended,
+/// for the next frame of a video to start from ([`super::fit_frame`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitState {
+    pub pose: BodyPose,
+    /// The camera's translation; its rotation is [`camera_for`]'s, facing the body's front.
+    pub camera: Vec3,
+    /// How far each of the person's facial features sits from the default face's, in pixels
+    /// of the fitted image (identity: fitted on a photo or a video's first frame, then kept).
+    pub feature_offsets: [Vec2; FACE_FEATURES.len()],
 }
 
-impl State {
+impl FitState {
+    /// The state a source view holds (its pose and camera), with no feature offsets.
+    pub fn of_view(view: &crate::tracking::SourceView) -> Self {
+        Self {
+            pose: view.pose.clone(),
+            camera: view.camera.view_from_world.w_axis.truncate(),
+            feature_offsets: [Vec2::ZERO; FACE_FEATURES.len()],
+        }
+    }
+
+    /// GUAVA's camera of this state for a `side`² image.
+    pub fn camera(&self, side: u32) -> Camera {
+        camera_for(self.camera, side)
+    }
+
     pub(super) fn get(&self, u: Unknown) -> f64 {
         match u {
             Unknown::Camera(k) => self.camera[k] as f64,
@@ -82,7 +100,12 @@ pub(super) struct Stage<'a> {
     pub(super) unknowns: Vec<(Unknown, f64)>,
     /// Pairs of morph targets that pay `weight · a · b` for acting together.
     pub(super) antagonists: Vec<(usize, usize, f64)>,
-    pub(super) base: State,
+    /// Per unknown, where the last frame of a video had it and how strongly it is pulled there
+    /// (pixels per unit); empty for a photo.
+    pub(super) temporal: Vec<(f64, f64)>,
+    /// Levenberg–Marquardt iterations at most.
+    pub(super) iterations: usize,
+    pub(super) base: FitState,
     /// Where the priors pull joints: rest, or a relaxed hang for a T-posed rig's arms.
     pub(super) relaxed: BodyPose,
     pub(super) points: Vec<Vec3>,
@@ -90,7 +113,7 @@ pub(super) struct Stage<'a> {
 }
 
 impl Stage<'_> {
-    pub(super) fn state(&self, p: &[f64]) -> State {
+    pub(super) fn state(&self, p: &[f64]) -> FitState {
         let mut s = self.base.clone();
         for (&(u, _), &v) in self.unknowns.iter().zip(p) {
             s.set(u, v);
@@ -133,6 +156,12 @@ impl Stage<'_> {
             };
             w * (v - centre)
         }));
+        out.extend(
+            self.temporal
+                .iter()
+                .zip(p)
+                .map(|(&(previous, w), &v)| w * (v - previous)),
+        );
         let c = &s.pose.coefficients;
         out.extend(
             self.antagonists
@@ -142,7 +171,7 @@ impl Stage<'_> {
     }
 
     /// Minimises from `self.base`; returns the state, the iterations taken and the final cost.
-    pub(super) fn solve(&mut self, camera_step: f64) -> (State, usize, f64) {
+    pub(super) fn solve(&mut self, camera_step: f64) -> (FitState, usize, f64) {
         let p0: Vec<f64> = self
             .unknowns
             .iter()
@@ -157,7 +186,7 @@ impl Stage<'_> {
                 _ => 1e-4,
             })
             .collect();
-        let solution = lm::minimise(p0, &steps, ITERATIONS, |p, r| self.residuals(p, r));
+        let solution = lm::minimise(p0, &steps, self.iterations, |p, r| self.residuals(p, r));
         (
             self.state(&solution.params),
             solution.iterations,
@@ -167,7 +196,11 @@ impl Stage<'_> {
 
     /// Where `state` puts the observed points of `range`, in pixels (face points with their
     /// feature offsets).
-    pub(super) fn projected(&mut self, state: &State, range: std::ops::Range<usize>) -> Vec<Vec2> {
+    pub(super) fn projected(
+        &mut self,
+        state: &FitState,
+        range: std::ops::Range<usize>,
+    ) -> Vec<Vec2> {
         let saved = std::mem::replace(&mut self.base, state.clone());
         let mut r = Vec::new();
         self.residuals(&[], &mut r);
@@ -176,7 +209,7 @@ impl Stage<'_> {
     }
 
     /// Unweighted RMS pixel error of the observations in `state`.
-    pub(super) fn rms(&mut self, state: &State, range: std::ops::Range<usize>) -> f32 {
+    pub(super) fn rms(&mut self, state: &FitState, range: std::ops::Range<usize>) -> f32 {
         let n = range.len().max(1) as f32;
         let se: f32 = self
             .projected(state, range.clone())

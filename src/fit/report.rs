@@ -88,4 +88,7 @@ pub struct FaceFitReport {
     /// The used points' places on the body (from the [`FaceEmbedding`]), to re-project them
     /// when the pose is adjusted.
     pub surface: Vec<Landmark>,
+    /// How far each facial feature ([`super::FACE_FEATURES`]) sits in the image from where the
+    /// default face has it: the person's, kept when a video's later frames are fitted.
+    pub feature_offsets: [Vec2; super::FACE_FEATURES.len()],
 }

@@ -13,9 +13,9 @@
 
 use glam::{Vec2, Vec3};
 
-use super::problem::{Stage, State, Target, Unknown, camera_for};
+use super::problem::{FitState, Stage, Target, Unknown, camera_for};
 use super::unknowns::{joint_unknowns, root_and_camera};
-use super::{FACE_FEATURES, FitReport, SHAPE_PRIOR_PX};
+use super::{FitReport, ITERATIONS, SHAPE_PRIOR_PX};
 use crate::body::{BodyModel, BodyPose, Landmark, PointPoser, PosedBody, TargetGroup};
 use crate::photo::distance::nearest_seeds;
 use crate::raster::rasterize;
@@ -65,11 +65,7 @@ pub fn fit_silhouette(
     let person: Vec<bool> = mask.iter().map(|&m| m >= 0.5).collect();
     let mask_edge = outline(&person, size);
     let to_mask_edge = nearest_seeds(&mask_edge, size);
-    let mut state = State {
-        pose: view.pose.clone(),
-        camera: view.camera.view_from_world.w_axis.truncate(),
-        feature_offsets: [Vec2::ZERO; FACE_FEATURES.len()],
-    };
+    let mut state = FitState::of_view(view);
     let mut unknowns: Vec<(Unknown, f64)> = root_and_camera().collect();
     if let Some(j) = body.joint_index(SPINE) {
         unknowns.extend(joint_unknowns(body, j));
@@ -193,6 +189,8 @@ pub fn fit_silhouette(
             pixels: Vec::new(),
             unknowns: unknowns.clone(),
             antagonists: Vec::new(),
+            temporal: Vec::new(),
+            iterations: ITERATIONS,
             base: state.clone(),
             relaxed: view.pose.clone(),
             points: Vec::new(),

@@ -22,8 +22,6 @@ pub const DETECTOR_MODEL_PATH: &str = concat!(
 pub const DETECTOR_INPUT: usize = 224;
 /// MediaPipe's pose solution's default detection confidence.
 const MIN_SCORE: f32 = 0.5;
-/// The crop's margin around the detected body (as in training).
-const CROP_SCALE: f32 = 1.25;
 
 /// A person found on a photo.
 #[derive(Clone, Debug, PartialEq)]
@@ -75,7 +73,7 @@ impl PoseDetector {
             PersonDetection {
                 score: d.score,
                 keypoints: [k[0], k[1], k[2], k[3]],
-                roi: Roi::upright(k[0], CROP_SCALE * 2.0 * k[0].distance(k[1]), k[1] - k[0]),
+                roi: Roi::person(k[0], k[1]),
             }
         }))
     }

@@ -66,10 +66,22 @@ impl FaceLandmarker {
         source: &SourceImage,
         roi: Roi,
     ) -> Result<Option<FaceLandmarks>, OnnxError> {
+        self.detect_passes(source, roi, 2)
+    }
+
+    /// The face mesh in `roi` after `passes` crops (each placed by the last answer): a video's
+    /// next frame takes one, in the crop its last frame's mesh places.
+    pub fn detect_passes(
+        &mut self,
+        source: &SourceImage,
+        roi: Roi,
+        passes: usize,
+    ) -> Result<Option<FaceLandmarks>, OnnxError> {
         let found = roi.track(
             source,
             FACE_INPUT,
             MIN_PRESENCE,
+            passes,
             |x| self.run(x),
             Roi::face_from_landmarks,
         )?;

@@ -115,10 +115,23 @@ impl HandLandmarker {
         roi: Roi,
         side: Side,
     ) -> Result<Option<HandLandmarks>, OnnxError> {
+        self.detect_passes(source, roi, side, 2)
+    }
+
+    /// The subject's `side` hand in `roi` after `passes` crops (each placed by the last
+    /// answer): a video's next frame takes one, in the crop its last frame's hand places.
+    pub fn detect_passes(
+        &mut self,
+        source: &SourceImage,
+        roi: Roi,
+        side: Side,
+        passes: usize,
+    ) -> Result<Option<HandLandmarks>, OnnxError> {
         let found = roi.track(
             source,
             HAND_INPUT,
             MIN_PRESENCE,
+            passes,
             |x| self.run(x),
             Roi::hand_from_landmarks,
         )?;

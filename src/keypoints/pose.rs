@@ -71,6 +71,13 @@ impl PoseKeypoints {
         )
     }
 
+    /// The crop the next frame of a video is seen in: placed by the model's auxiliary
+    /// alignment landmarks (33, mid-hip; 34, size and turn) as the detector's crop is, so that
+    /// the detector runs only when the person is lost (MediaPipe's pose tracking).
+    pub fn next_roi(&self) -> Roi {
+        Roi::person(self.point(33).0, self.point(34).0)
+    }
+
     /// How much of the body the model sees: the sum of its 33 body landmarks' confidences.
     pub fn seen(&self) -> f32 {
         (0..BODY_LANDMARKS).map(|i| self.point(i).1).sum()
@@ -79,15 +86,17 @@ impl PoseKeypoints {
     /// The mask (bilinear) over a `side`² source image; outside the crop nobody.
     pub fn mask_at(&self, side: usize) -> Vec<f32> {
         (0..side * side)
-            .map(|i| {
-                let pixel = Vec2::new((i % side) as f32 + 0.5, (i / side) as f32 + 0.5);
-                if !self.roi.covers(pixel) {
-                    return 0.0;
-                }
-                let p = self.roi.to_input(pixel, POSE_INPUT);
-                bilinear_clamped(POSE_INPUT, p.x - 0.5, p.y - 0.5, |k| self.mask[k])
-            })
+            .map(|i| self.mask_value(Vec2::new((i % side) as f32 + 0.5, (i / side) as f32 + 0.5)))
             .collect()
+    }
+
+    /// The mask (bilinear) at one point of the source image; outside the crop nobody.
+    pub fn mask_value(&self, pixel: Vec2) -> f32 {
+        if !self.roi.covers(pixel) {
+            return 0.0;
+        }
+        let p = self.roi.to_input(pixel, POSE_INPUT);
+        bilinear_clamped(POSE_INPUT, p.x - 0.5, p.y - 0.5, |k| self.mask[k])
     }
 }
 

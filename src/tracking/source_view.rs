@@ -17,15 +17,19 @@ pub struct SourceView {
     pub crop: Option<Crop>,
 }
 
+/// `body`'s parameters split into identity (shape: a tracking file's `identity`) and the rest
+/// (every frame's `values`), as indices.
+fn split_parameters(body: &impl Posable) -> (Vec<usize>, Vec<usize>) {
+    (0..body.parameter_names().len()).partition(|&i| body.is_identity_parameter(i))
+}
+
 impl SourceView {
     /// A one-frame tracking file for `body` holding this view exactly (what `guava fit` and the
     /// viewer's *Save as tracking* write): its rig's joints, its shape as identity (with EHM's
     /// skeleton for an EHM body), its other parameters as the frame's values, the camera;
     /// `source` says where it came from.
     pub fn to_tracking(&self, body: &impl Posable, source: &str) -> Tracking {
-        let view = self;
-        let (identity, values): (Vec<usize>, Vec<usize>) =
-            (0..body.parameter_names().len()).partition(|&i| body.is_identity_parameter(i));
+        let (identity, values) = split_parameters(body);
         let names: Vec<&str> = body.parameter_names().collect();
         let mut tracking = Tracking::new(
             rig_of(body).unwrap_or(BodyKind::Default),
@@ -35,28 +39,35 @@ impl SourceView {
         );
         tracking.source = source.into();
         for i in identity {
-            if view.pose.coefficients[i] != 0.0 {
+            if self.pose.coefficients[i] != 0.0 {
                 let name = names[i].to_owned();
                 tracking
                     .identity
                     .parameters
-                    .insert(name, view.pose.coefficients[i]);
+                    .insert(name, self.pose.coefficients[i]);
             }
         }
         tracking.identity.ehm = body.ehm_identity().map(EhmIdentityRecord::of);
-        let w2c: glam::Mat4 = view.camera.view_from_world;
+        tracking.frames.push(self.to_frame(body));
+        tracking
+    }
+
+    /// This view as one frame of a tracking file made by [`Self::to_tracking`] for `body`: the
+    /// pose's translation, rotations and non-identity parameters, and the camera.
+    pub fn to_frame(&self, body: &impl Posable) -> Frame {
+        let (_, values) = split_parameters(body);
+        let w2c: glam::Mat4 = self.camera.view_from_world;
         let rows = [0, 1, 2].map(|r| w2c.row(r).to_array());
-        tracking.frames.push(Frame {
-            translation: view.pose.translation.to_array(),
-            rotations: view.pose.rotations.iter().map(|r| r.to_array()).collect(),
-            values: values.iter().map(|&i| view.pose.coefficients[i]).collect(),
+        Frame {
+            translation: self.pose.translation.to_array(),
+            rotations: self.pose.rotations.iter().map(|r| r.to_array()).collect(),
+            values: values.iter().map(|&i| self.pose.coefficients[i]).collect(),
             camera: Some(TrackedCamera {
                 w2c: rows,
-                invtanfov: view.camera.invtanfov(),
-                crop: view.crop.map(Crop::to_array),
+                invtanfov: self.camera.invtanfov(),
+                crop: self.crop.map(Crop::to_array),
             }),
-        });
-        tracking
+        }
     }
 
     /// Frame 0 of `tracking`, retargeted onto `body`; the camera is the frame's tracked camera at
