@@ -26,4 +26,5 @@ mod splat_stability;
 mod splat_vs_reference;
 mod tracking;
 mod tracking_convert;
+mod video_track;
 mod wholebody;

@@ -8,6 +8,7 @@ mod photo;
 mod refiner;
 mod render;
 mod report;
+mod track;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -127,18 +128,30 @@ enum Command {
     },
     /// How faithful an avatar is to its photo: the avatar re-rendered from the photo's camera
     /// against the photo × person mask. Prints `iou=… psnr=… ssim=… l1=…` (silhouette IoU; PSNR,
-    /// SSIM and mean absolute error of RGB over the person's box).
+    /// SSIM and mean absolute error of RGB over the person's box). With --video: self-reenactment.
     Eval {
-        #[arg(long)]
-        avatar: PathBuf,
+        /// The avatar (with --video: made here from the reference frame when not given).
+        #[arg(long, required_unless_present = "video")]
+        avatar: Option<PathBuf>,
         /// The photo it was made from.
-        #[arg(long, required_unless_present = "frames", conflicts_with = "frames")]
+        #[arg(long, required_unless_present_any = ["frames", "video"], conflicts_with_all = ["frames", "video"])]
         image: Option<PathBuf>,
         /// Self-reenactment: a folder of video frames (PNG or JPEG, in name order) tracked by
         /// --tracking (one tracked frame, with its camera, per image); the avatar is posed and
         /// seen as each frame and compared with it, as GUAVA's paper measures.
-        #[arg(long, requires = "tracking")]
+        #[arg(long, requires = "tracking", conflicts_with = "video")]
         frames: Option<PathBuf>,
+        /// Self-reenactment on a video (MP4/MOV with H.264): an avatar made from
+        /// --reference-frame, driven by the tracking of every frame (--tracking, or tracked
+        /// here), seen through each frame's tracked camera and compared with the frame.
+        #[arg(long)]
+        video: Option<PathBuf>,
+        /// With --video: the frame the avatar is made from.
+        #[arg(long, default_value_t = 0, requires = "video")]
+        reference_frame: usize,
+        /// With --video or --frames: compare every n-th frame only.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+        every: u32,
         /// The photo's tracking file, for avatars that do not carry their source view (with
         /// --frames: the video's tracking).
         #[arg(long)]
@@ -146,7 +159,8 @@ enum Command {
         /// The EHM body (tools/convert_ehm.py) a GUAVA-mode avatar is bound to.
         #[arg(long)]
         ehm: Option<PathBuf>,
-        /// Also write the photo, the render and their difference side by side as PNG.
+        /// Also write the photo, the render and their difference side by side as PNG (with
+        /// --video or --frames: a folder of them, one per compared frame, and compare.mp4).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Also LPIPS, with this ONNX model (tools/export_lpips_onnx.py makes LPIPS-Alex, the
@@ -156,6 +170,10 @@ enum Command {
         #[command(flatten)]
         keypoints: photo::KeypointArgs,
     },
+    /// Track a video of a person (an MP4/MOV file with H.264, or a folder of frames) into a
+    /// tracking file of the default body: MediaPipe's models in tracking mode, One Euro filters
+    /// and the fit warm-started from frame to frame.
+    Track(track::TrackArgs),
     /// Benchmarks (print a table).
     Bench {
         #[command(subcommand)]
@@ -189,6 +207,9 @@ enum Bench {
     /// and what refining costs per frame.
     #[command(alias = "refine")]
     Refiner(bench::RefinerBenchArgs),
+    /// Tracking a video: frames a second at 480p and 720p (the shipped clip scaled), jitter
+    /// raw against filtered, and a synthetic clip's tracked joints against the truth.
+    Track(bench::TrackBenchArgs),
 }
 
 fn main() {
@@ -266,19 +287,28 @@ fn run(cli: Cli) -> Result<()> {
             avatar,
             image,
             frames,
+            video,
+            reference_frame,
+            every,
             tracking,
             ehm,
             out,
             lpips,
             keypoints,
         } => {
-            let target = match (image, frames) {
-                (_, Some(dir)) => photo::Target::Frames(dir),
-                (Some(image), None) => photo::Target::Photo(image),
-                (None, None) => anyhow::bail!("give --image or --frames"),
+            let every = every as usize;
+            let target = match (image, frames, video) {
+                (_, Some(dir), _) => photo::Target::Frames { dir, every },
+                (_, _, Some(video)) => photo::Target::Video {
+                    video,
+                    reference_frame,
+                    every,
+                },
+                (Some(image), None, None) => photo::Target::Photo(image),
+                (None, None, None) => anyhow::bail!("give --image, --frames or --video"),
             };
             photo::eval(
-                &avatar,
+                avatar.as_deref(),
                 &target,
                 tracking.as_deref(),
                 ehm.as_deref(),
@@ -287,6 +317,7 @@ fn run(cli: Cli) -> Result<()> {
                 &keypoints,
             )
         }
+        Command::Track(args) => track::run(&args),
         Command::Motion { file, out, ehm } => motion(&file, out.as_deref(), ehm.as_deref()),
         Command::Bench { which } => match which {
             Bench::Splat(args) => bench::splat(&args),
@@ -296,6 +327,7 @@ fn run(cli: Cli) -> Result<()> {
             Bench::Frame(args) => bench::frame(&args),
             Bench::Refiner(args) => bench::refiner(&args),
             Bench::Fidelity(args) => bench::fidelity(&args),
+            Bench::Track(args) => bench::track(&args),
         },
     }
 }

@@ -25,7 +25,7 @@ pub struct KeypointArgs {
 }
 
 impl KeypointArgs {
-    fn pipeline(&self) -> Pipeline {
+    pub fn pipeline(&self) -> Pipeline {
         Pipeline::new(KeypointModels::new(
             self.keypoint_models.clone(),
             self.dwpose.clone(),
@@ -220,18 +220,24 @@ fn write_fit_overlay(
     guava::render::save_png(&canvas, path)
 }
 
-/// Compares an avatar, re-rendered from its photo's view, with the photo; prints the metrics on
-/// one line, and with `out` writes photo | render | difference as PNG.
 /// What `guava eval` compares the avatar with.
 pub enum Target {
     /// The photo it was made from (seen from its source view).
     Photo(PathBuf),
-    /// A tracked video's frames, in name order (self-reenactment).
-    Frames(PathBuf),
+    /// A tracked video's frames, in name order (self-reenactment), every `every`-th compared.
+    Frames { dir: PathBuf, every: usize },
+    /// A video (self-reenactment): the avatar made from `reference_frame` unless given.
+    Video {
+        video: PathBuf,
+        reference_frame: usize,
+        every: usize,
+    },
 }
 
+/// Compares an avatar, re-rendered from its photo's view (or a video's tracked views), with the
+/// photo (or the frames); prints the metrics, and with `out` writes photo | render | difference.
 pub fn eval(
-    avatar: &Path,
+    avatar: Option<&Path>,
     target: &Target,
     tracking: Option<&Path>,
     ehm: Option<&Path>,
@@ -239,7 +245,12 @@ pub fn eval(
     lpips: Option<&Path>,
     keypoints: &KeypointArgs,
 ) -> Result<()> {
-    let avatar_file = guava::avatar::Avatar::load(avatar)?;
+    let avatar_file = match avatar {
+        Some(path) => {
+            Some(guava::avatar::Avatar::load(path).with_context(|| path.display().to_string())?)
+        }
+        None => None,
+    };
     let mut lpips = match lpips {
         Some(path) => Some(guava::eval::lpips::Lpips::load(
             guava::onnx::OnnxRuntime::load()?,
@@ -247,138 +258,264 @@ pub fn eval(
         )?),
         None => None,
     };
-    match ehm {
-        Some(path) => {
+    let mut run = Eval {
+        target,
+        tracking,
+        out,
+        lpips: &mut lpips,
+        pipeline: keypoints.pipeline(),
+        renderer: guava::render::HeadlessRenderer::new(guava::gpu::GpuContext::headless()?),
+    };
+    match (ehm, avatar_file) {
+        (Some(path), Some(avatar)) => {
             let mut body = EhmModel::load(path)?;
-            avatar_file.apply_ehm_identity(&mut body);
-            eval_on(
-                &avatar_file,
-                &body,
-                target,
-                tracking,
-                out,
-                &mut lpips,
-                keypoints,
-            )
+            avatar.apply_ehm_identity(&mut body);
+            run.on(avatar, &body)
         }
-        None => eval_on(
-            &avatar_file,
-            &BodyModel::default_body()?,
-            target,
-            tracking,
-            out,
-            &mut lpips,
-            keypoints,
-        ),
+        (Some(_), None) => {
+            anyhow::bail!("a GUAVA-mode avatar is made by guava reconstruct: give it with --avatar")
+        }
+        (None, Some(avatar)) => run.on(avatar, &BodyModel::default_body()?),
+        (None, None) => run.video_avatar(),
     }
-    .with_context(|| avatar.display().to_string())
 }
 
-fn eval_on(
-    avatar: &guava::avatar::Avatar,
-    body: &impl guava::body::Posable,
-    target: &Target,
-    tracking: Option<&Path>,
-    out: Option<&Path>,
-    lpips: &mut Option<guava::eval::lpips::Lpips>,
-    keypoints: &KeypointArgs,
-) -> Result<()> {
-    avatar.check_body(body).map_err(anyhow::Error::msg)?;
-    let mut pipeline = keypoints.pipeline();
-    let mut renderer = guava::render::HeadlessRenderer::new(guava::gpu::GpuContext::headless()?);
-    let image = match target {
-        Target::Frames(dir) => {
-            let path = tracking.expect("clap requires --tracking with --frames");
-            return reenact(avatar, body, dir, path, &mut pipeline, &mut renderer, lpips);
-        }
-        Target::Photo(image) => image,
-    };
-    let view = match tracking {
-        Some(path) => {
-            let t = guava::tracking::Tracking::load(path)?;
-            SourceView::from_tracking(&t, body, &path.display().to_string())?
-        }
-        None => avatar
-            .source_view
-            .clone()
-            .ok_or(guava::eval::EvalError::NoSourceView)?,
-    };
-    let photo = pipeline.masked_photo(Photo::File(image), &view, &mut |_| true)?;
-    let (metrics, rendered) =
-        guava::eval::evaluate(&mut renderer, avatar, body, Some(&view), &photo)?;
-    let d = match lpips {
-        Some(model) => guava::eval::perceptual(model, &rendered, &photo)?,
-        None => f64::NAN,
-    };
-    println!("{metrics}{}", lpips_text(d));
-    if let Some(path) = out {
-        guava::render::save_png(&guava::eval::side_by_side(&photo, &rendered), path)?;
-        println!("photo | render | difference → {}", path.display());
-    }
-    Ok(())
+/// One `guava eval` run: what it compares with and how.
+struct Eval<'a> {
+    target: &'a Target,
+    tracking: Option<&'a Path>,
+    out: Option<&'a Path>,
+    lpips: &'a mut Option<guava::eval::lpips::Lpips>,
+    pipeline: guava::pipeline::Pipeline,
+    renderer: guava::render::HeadlessRenderer,
 }
 
-/// Self-reenactment: every frame of a tracked video against the avatar posed and seen as that
-/// frame (its tracked pose and camera, with the avatar's identity); one line per frame, then
-/// the means.
-fn reenact(
-    avatar: &guava::avatar::Avatar,
-    body: &impl guava::body::Posable,
-    dir: &Path,
-    tracking: &Path,
-    pipeline: &mut guava::pipeline::Pipeline,
-    renderer: &mut guava::render::HeadlessRenderer,
-    lpips: &mut Option<guava::eval::lpips::Lpips>,
-) -> Result<()> {
-    let t = guava::tracking::Tracking::load(tracking)?;
-    let mut frames: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| dir.display().to_string())?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| ["png", "jpg", "jpeg"].contains(&e.to_ascii_lowercase().as_str()))
-        })
-        .collect();
-    frames.sort();
-    if frames.len() != t.frames.len() {
-        anyhow::bail!(
-            "{}: {} images, but {} tracks {} frames (one tracked frame per image)",
-            dir.display(),
-            frames.len(),
-            tracking.display(),
-            t.frames.len()
-        );
-    }
-    let file = tracking.display().to_string();
-    let mut sums = [0.0f64; 5];
-    for (i, frame) in frames.iter().enumerate() {
-        let mut view = SourceView::at_frame(&t, body, i, &file)?;
-        avatar.apply_identity(body, &mut view.pose);
-        let photo = pipeline.masked_photo(Photo::File(frame), &view, &mut |_| true)?;
-        let (m, rendered) = guava::eval::evaluate(renderer, avatar, body, Some(&view), &photo)
-            .with_context(|| frame.display().to_string())?;
-        let d = match lpips.as_mut() {
-            Some(model) => guava::eval::perceptual(model, &rendered, &photo)
-                .with_context(|| frame.display().to_string())?,
+impl Eval<'_> {
+    fn on(
+        &mut self,
+        avatar: guava::avatar::Avatar,
+        body: &impl guava::body::Posable,
+    ) -> Result<()> {
+        avatar.check_body(body).map_err(anyhow::Error::msg)?;
+        let image = match self.target {
+            Target::Photo(image) => image,
+            Target::Frames { dir, every } => {
+                let path = self
+                    .tracking
+                    .expect("clap requires --tracking with --frames");
+                let t = guava::tracking::Tracking::load(path)?;
+                let mut frames = guava::video::FrameFolder::open(dir, t.fps)?;
+                return self.reenact(&avatar, body, &mut frames, &t, None, *every);
+            }
+            Target::Video {
+                video,
+                reference_frame,
+                every,
+            } => {
+                let t = self.video_tracking(video)?;
+                let mut frames = guava::video::open(video, t.fps)?;
+                return self.reenact(
+                    &avatar,
+                    body,
+                    frames.as_mut(),
+                    &t,
+                    Some(*reference_frame),
+                    *every,
+                );
+            }
+        };
+        let view = match self.tracking {
+            Some(path) => {
+                let t = guava::tracking::Tracking::load(path)?;
+                SourceView::from_tracking(&t, body, &path.display().to_string())?
+            }
+            None => avatar
+                .source_view
+                .clone()
+                .ok_or(guava::eval::EvalError::NoSourceView)?,
+        };
+        let photo = self
+            .pipeline
+            .masked_photo(Photo::File(image), &view, &mut |_| true)?;
+        let (metrics, rendered) =
+            guava::eval::evaluate(&mut self.renderer, &avatar, body, Some(&view), &photo)?;
+        let d = match self.lpips {
+            Some(model) => guava::eval::perceptual(model, &rendered, &photo)?,
             None => f64::NAN,
         };
-        println!("frame {i}: {m}{}", lpips_text(d));
-        for (s, v) in sums.iter_mut().zip([m.iou, m.psnr, m.ssim, m.l1, d]) {
-            *s += v;
+        println!("{metrics}{}", lpips_text(d));
+        if let Some(path) = self.out {
+            guava::render::save_png(&guava::eval::side_by_side(&photo, &rendered), path)?;
+            println!("photo | render | difference → {}", path.display());
+        }
+        Ok(())
+    }
+
+    /// The video's tracking: the file given, or tracked here (filtered).
+    fn video_tracking(&mut self, video: &Path) -> Result<guava::tracking::Tracking> {
+        match self.tracking {
+            Some(path) => Ok(guava::tracking::Tracking::load(path)?),
+            None => {
+                let body = BodyModel::default_body()?;
+                let fps = 30.0;
+                crate::track::track_file(video, fps, &body, &mut self.pipeline)
+            }
         }
     }
-    let n = frames.len().max(1) as f64;
-    println!(
-        "mean over {} frames: iou={:.4} psnr={:.2} ssim={:.4} l1={:.4}{}",
-        frames.len(),
-        sums[0] / n,
-        sums[1] / n,
-        sums[2] / n,
-        sums[3] / n,
-        lpips_text(sums[4] / n)
-    );
-    Ok(())
+
+    /// `--video` without `--avatar`: the default reconstruction of the reference frame, seen
+    /// through its tracked view, then self-reenactment.
+    fn video_avatar(&mut self) -> Result<()> {
+        let Target::Video {
+            video,
+            reference_frame,
+            ..
+        } = self.target
+        else {
+            anyhow::bail!("give --avatar");
+        };
+        let body = BodyModel::default_body()?;
+        let t = self.video_tracking(video)?;
+        let mut frames = guava::video::open(video, t.fps)?;
+        let frame = std::iter::from_fn(|| frames.next_frame())
+            .nth(*reference_frame)
+            .with_context(|| {
+                format!(
+                    "{}: has no frame {reference_frame} (--reference-frame)",
+                    video.display()
+                )
+            })??;
+        let file = self.tracking.map_or_else(
+            || format!("{} (tracked)", video.display()),
+            |p| p.display().to_string(),
+        );
+        let view = SourceView::at_frame(&t, &body, *reference_frame, &file)?;
+        let name = format!("{} frame {reference_frame}", video.display());
+        let outcome = self.pipeline.reconstruct(
+            guava::pipeline::Mode::Default(&body),
+            Photo::Pixels {
+                name: &name,
+                pixels: frame.pixels,
+                has_alpha: false,
+            },
+            guava::pipeline::Tracked::Given(view),
+            &mut |_| true,
+        )?;
+        eprintln!(
+            "  avatar from frame {reference_frame}: {} ({} Gaussians)",
+            outcome.avatar.kind.label(),
+            outcome.avatar.template.len() + outcome.avatar.uv.local.len()
+        );
+        self.on(outcome.avatar, &body)
+    }
+
+    /// Self-reenactment: every `every`-th frame of `frames` against the avatar posed and seen
+    /// as that frame (its tracked pose and camera, with the avatar's identity); one line per
+    /// frame, then the means (without the reference frame, which the avatar was made from).
+    fn reenact(
+        &mut self,
+        avatar: &guava::avatar::Avatar,
+        body: &impl guava::body::Posable,
+        frames: &mut dyn guava::video::FrameSource,
+        t: &guava::tracking::Tracking,
+        reference: Option<usize>,
+        every: usize,
+    ) -> Result<()> {
+        let name = frames.info().name.clone();
+        if let Some(n) = frames.info().frames
+            && n != t.frames.len()
+        {
+            anyhow::bail!(
+                "{name}: {n} frames, but its tracking has {} (one tracked frame per frame)",
+                t.frames.len()
+            );
+        }
+        if let Some(dir) = self.out {
+            std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+        }
+        let file = self
+            .tracking
+            .map_or_else(|| format!("{name} (tracked)"), |p| p.display().to_string());
+        let (mut sums, mut compared, mut written) = ([0.0f64; 5], 0usize, Vec::new());
+        while let Some(frame) = frames.next_frame() {
+            let frame = frame?;
+            let i = frame.index;
+            if !i.is_multiple_of(every) {
+                continue;
+            }
+            let mut view = SourceView::at_frame(t, body, i, &file)?;
+            avatar.apply_identity(body, &mut view.pose);
+            let label = format!("{name} frame {i}");
+            // A frame's alpha, where it has one (frames written with a person mask), is the mask.
+            let has_alpha = frame.pixels.pixels().any(|p| p[3] < u8::MAX);
+            let photo = self.pipeline.masked_photo(
+                Photo::Pixels {
+                    name: &label,
+                    pixels: frame.pixels,
+                    has_alpha,
+                },
+                &view,
+                &mut |_| true,
+            )?;
+            let (m, rendered) =
+                guava::eval::evaluate(&mut self.renderer, avatar, body, Some(&view), &photo)
+                    .with_context(|| label.clone())?;
+            let d = match self.lpips.as_mut() {
+                Some(model) => guava::eval::perceptual(model, &rendered, &photo)
+                    .with_context(|| label.clone())?,
+                None => f64::NAN,
+            };
+            let is_reference = reference == Some(i);
+            println!(
+                "frame {i}: {m}{}{}",
+                lpips_text(d),
+                if is_reference {
+                    " (the reference frame)"
+                } else {
+                    ""
+                }
+            );
+            if let Some(dir) = self.out {
+                let path = guava::render::sequence::frame_path(dir, written.len());
+                guava::render::save_png(&guava::eval::side_by_side(&photo, &rendered), &path)?;
+                written.push(path);
+            }
+            if !is_reference {
+                for (s, v) in sums.iter_mut().zip([m.iou, m.psnr, m.ssim, m.l1, d]) {
+                    *s += v;
+                }
+                compared += 1;
+            }
+        }
+        if frames.info().frames.is_none() && compared == 0 {
+            anyhow::bail!("{name}: no frame to compare");
+        }
+        let n = compared.max(1) as f64;
+        println!(
+            "mean over {compared} frames{}: iou={:.4} psnr={:.2} ssim={:.4} l1={:.4}{}",
+            if reference.is_some() {
+                " (the reference frame left out)"
+            } else {
+                ""
+            },
+            sums[0] / n,
+            sums[1] / n,
+            sums[2] / n,
+            sums[3] / n,
+            lpips_text(sums[4] / n)
+        );
+        if let (Some(dir), false) = (self.out, written.is_empty()) {
+            let mp4 = dir.join("compare.mp4");
+            let fps = (t.fps / every as f32).max(1.0);
+            guava::render::sequence::write_mp4(&written, fps, &mp4)?;
+            println!(
+                "photo | render | difference: {} frames and {}",
+                written.len(),
+                mp4.display()
+            );
+        }
+        Ok(())
+    }
 }
 
 /// ` lpips=…` where it was measured (not NaN), else nothing.

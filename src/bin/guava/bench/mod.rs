@@ -7,6 +7,7 @@ mod guava_mode;
 mod reconstruct;
 mod refiner;
 mod splat;
+mod track;
 
 pub use body::{BodyBenchArgs, body, cpu_name};
 pub use fidelity::{FidelityBenchArgs, fidelity};
@@ -15,6 +16,7 @@ pub use guava_mode::{GuavaBenchArgs, guava};
 pub use reconstruct::{ReconstructBenchArgs, reconstruct};
 pub use refiner::{RefinerBenchArgs, refiner};
 pub use splat::{SplatBenchArgs, splat};
+pub use track::{TrackBenchArgs, track};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
