@@ -43,6 +43,8 @@ pub struct Options {
     /// With nothing else to open, start on the demo portrait's avatar (the window does; tests
     /// start on the bare body).
     pub demo_avatar: bool,
+    /// Drive the body from this video once what was asked to open has opened.
+    pub drive: Option<PathBuf>,
 }
 
 /// A new id for something the viewport uploads or re-renders by id (a cloud, an avatar, a body's
@@ -119,6 +121,8 @@ pub struct GuavaApp {
     pub(crate) avatar: Option<AvatarState>,
     /// The motion driving the body (the demo motion until another is opened).
     pub(crate) motion: Option<Motion>,
+    /// A video or webcam driving the body live (the motion waits meanwhile).
+    pub(crate) drive: Option<crate::drive::Drive>,
     /// GUAVA's networks, once the user opened their folder (GUAVA mode with an EHM body).
     pub(crate) networks: Option<Networks>,
     /// EHM-Tracker's keypoint models folder, once the user chose it: its DWPose places the body
@@ -206,6 +210,7 @@ impl GuavaApp {
             body: None,
             avatar: None,
             motion: None,
+            drive: None,
             networks: None,
             dwpose: None,
             pipeline: Arc::default(),
@@ -437,6 +442,9 @@ impl GuavaApp {
         // What was asked to open has opened (the first launch: the demo portrait's avatar).
         if self.clock.opened.is_none() && self.job.is_none() && self.queue.is_empty() {
             self.clock.opened = Some(Instant::now());
+            if let Some(video) = self.options.drive.take() {
+                self.drive_from(crate::drive::DriveSource::File(video));
+            }
             if let Some(a) = &self.avatar {
                 // The real-window test waits for this line to photograph the avatar.
                 println!("guava-viewer: showing {}", a.avatar.source);
@@ -475,10 +483,17 @@ impl GuavaApp {
         }
     }
 
-    /// Plays the motion onto the body, unless the fit is being adjusted by hand (then the body
-    /// holds the photo's pose).
+    /// Plays the motion (or a live drive) onto the body, unless the fit is being adjusted by
+    /// hand (then the body holds the photo's pose).
     fn advance_motion(&mut self, ctx: &egui::Context) {
         let editing = self.editing_fit();
+        if let (Some(drive), Some(body), false) = (&mut self.drive, &mut self.body, editing) {
+            drive.update(body.model.as_ref(), &mut body.pose);
+            if drive.running() {
+                ctx.request_repaint();
+            }
+            return;
+        }
         if let (Some(motion), Some(body), false) = (&mut self.motion, &mut self.body, editing) {
             let dt = ctx.input(|i| i.unstable_dt) as f64;
             motion.update(dt, &mut body.pose);

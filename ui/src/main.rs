@@ -28,6 +28,10 @@ struct Args {
     /// has opened, as a driver reset would (the viewer saves your avatar and exits with a message).
     #[arg(long, hide = true)]
     lose_device_after: Option<f32>,
+    /// Drive the body live from this video (MP4/MOV with H.264, or a folder of frames) once
+    /// what is opened has opened (as *Drive > From video…*).
+    #[arg(long)]
+    drive: Option<PathBuf>,
 }
 
 fn main() {
@@ -50,6 +54,7 @@ fn main() {
         motion_time: args.motion_time,
         lose_device_after: args.lose_device_after,
         demo_avatar: true,
+        drive: args.drive,
     };
     guava_ui::recovery::install_panic_hook();
     let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();

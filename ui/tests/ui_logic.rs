@@ -1290,3 +1290,74 @@ fn refining_while_interacting_shows_the_latest_refined_frame() {
     }
     h.get_by_label("refined");
 }
+
+/// Live driving on a replayed clip (a synthetic video of the default body, written as MP4 by
+/// the project's encoder): the body is posed from the tracker's solves while the UI keeps
+/// drawing frames of its own between them (it never waits on the tracker); the HUD says how
+/// far behind the video the pose is; what was recorded
+/// saves as a valid tracking file at the video's rate.
+#[test]
+fn driving_from_a_video_poses_the_body_without_waiting_for_the_tracker() {
+    use guava_ui::drive::DriveSource;
+    let body = guava::body::BodyModel::default_body().expect("body");
+    let (frames, _) = guava::synthetic::demo_motion_clip(&body, 5.5, 12, 6.0).expect("drawn");
+    let dir = std::env::temp_dir().join(format!("guava-ui-drive-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let video = dir.join("wave.mp4");
+    let rgb: Vec<image::RgbImage> = frames
+        .iter()
+        .map(|f| image::DynamicImage::ImageRgba8(f.pixels.clone()).to_rgb8())
+        .collect();
+    guava::render::sequence::write_mp4_frames(&rgb, 6.0, &video).expect("mp4");
+
+    let mut h = harness(Options::default());
+    h.run();
+    let rest = h.state_mut().body_mut().expect("body").pose.clone();
+    h.state_mut().drive_from(DriveSource::File(video));
+    h.state().driving().expect("driving").set_recording(true);
+    let (mut ui_frames, mut frames_between_solves, mut last_solves) = (0, 0, 0);
+    let start = Instant::now();
+    while h.state().driving().is_some_and(|d| d.running())
+        && start.elapsed() < Duration::from_secs(180)
+    {
+        frame(&mut h);
+        ui_frames += 1;
+        let solves = h.state().driving().map_or(0, |d| d.solves());
+        if solves == last_solves {
+            frames_between_solves += 1;
+        }
+        last_solves = solves;
+    }
+    let drive = h.state().driving().expect("driving");
+    assert!(!drive.running(), "the clip was played and tracked");
+    let message = drive.message();
+    assert!(message.is_none(), "{message:?}");
+    println!(
+        "{} solves, {ui_frames} UI frames, {frames_between_solves} of them between solves",
+        drive.solves()
+    );
+    assert!(drive.solves() >= 2, "solves: {}", drive.solves());
+    assert!(
+        frames_between_solves > 0,
+        "the UI drew frames while the tracker worked"
+    );
+    let driven = h.state_mut().body_mut().expect("body").pose.clone();
+    assert_ne!(driven, rest, "the body is posed by the video");
+    h.get_by_label("drive: latency");
+
+    let tracking = h
+        .state()
+        .driving()
+        .and_then(|d| d.recording_as_tracking())
+        .expect("recorded");
+    assert!((tracking.fps - 6.0).abs() < 1e-3, "{}", tracking.fps);
+    assert!(!tracking.frames.is_empty());
+    let out = dir.join("recorded.json");
+    tracking.save(&out).expect("a valid tracking file");
+    guava::tracking::Tracking::load(&out).expect("reads back");
+
+    h.state_mut().stop_driving();
+    frame(&mut h);
+    assert!(h.state().driving().is_none());
+    std::fs::remove_dir_all(&dir).ok();
+}

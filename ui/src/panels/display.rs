@@ -152,6 +152,9 @@ impl GuavaApp {
                     ui.end_row();
                 };
                 row("UI frame", format!("{:.1} ms", self.clock.frame_ms));
+                for (k, v) in self.drive_hud_rows() {
+                    row(k, v);
+                }
                 if let Some(body) = &self.body {
                     row("pose (CPU)", format!("{:.1} ms", body.pose_ms));
                 }

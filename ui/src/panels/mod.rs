@@ -4,11 +4,13 @@
 mod avatar;
 mod camera;
 mod display;
+mod drive;
 mod mode;
 mod viewport;
 
 use crate::app::{GuavaApp, View};
 use crate::files::demo_portrait;
+pub use drive::demo_video;
 
 impl GuavaApp {
     pub(crate) fn menu_ui(&mut self, ui: &mut egui::Ui) {
@@ -77,6 +79,7 @@ impl GuavaApp {
                     ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
                 }
             });
+            ui.menu_button("Drive", |ui| self.drive_menu_ui(ui));
             ui.menu_button("View", |ui| {
                 self.view_choice_ui(ui);
                 ui.separator();
@@ -168,6 +171,7 @@ impl GuavaApp {
                 }
             }
             ui.separator();
+            self.drive_ui(ui);
             self.motion_ui(ui);
             ui.separator();
         }

@@ -16,7 +16,14 @@ use crate::viewport::ViewportCallback;
 const SETTLE: Duration = Duration::from_millis(150);
 
 impl GuavaApp {
+    /// The viewport, and over it the video driving the body, if any.
     pub(crate) fn viewport_ui(&mut self, ui: &mut egui::Ui) {
+        let rect = ui.available_rect_before_wrap();
+        self.view_ui(ui);
+        self.drive_picture_ui(ui, rect);
+    }
+
+    fn view_ui(&mut self, ui: &mut egui::Ui) {
         let mut rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
         // The photo beside the avatar: the left half shows it, the avatar draws in the right.
@@ -101,7 +108,8 @@ impl GuavaApp {
             (View::Body, _, Some(body), _) => Content::Mesh(body.frame(self.background)),
             _ => return,
         };
-        let playing = self.motion.as_ref().is_some_and(|m| m.is_playing());
+        let playing = self.motion.as_ref().is_some_and(|m| m.is_playing())
+            || self.drive.as_ref().is_some_and(|d| d.running());
         // Dragging the split's line moves no content: not interaction.
         let splitting = ui.ctx().is_being_dragged(Self::split_id(ui));
         let pressed = ui.ctx().input(|i| i.pointer.any_down()) && !splitting;
