@@ -60,10 +60,18 @@ keep the committed model files unless the conversion itself changes):
   to 128²); outputs 896×16 box and six-keypoint offsets per SSD anchor and 896 score logits.
 - tests/data/face_detection_fixture.json and tests/data/demo_portrait_128.png: the detector's
   input for the demo portrait and TFLite's outputs at its five best anchors.
+- assets/models/selfie_segmentation.onnx: MediaPipe `selfie_segmentation.tflite` (Apache-2.0, same
+  wheel), opset 17. Input [1,256,256,3] RGB in [0, 1] (the photo's square resized); output
+  [1,256,256,1] person probability. Its last layer is MediaPipe's custom op
+  `Convolution2DTransposeBias` (a 2×2, stride-2 transposed convolution with bias), which tf2onnx
+  cannot read: the graph is cut before it, converted, and the op appended as ONNX's ConvTranspose
+  with the model's own (fp16) kernel and bias, then the model's sigmoid. Checked against the
+  truncated TFLite graph plus the same op in NumPy (the cut) and against MediaPipe's own
+  `solutions.selfie_segmentation` on the demo portrait (the op's meaning: mask IoU).
 Each converted model is checked against the TFLite interpreter on the real photo (not only random
 input) before anything is written. `--models iris` (a comma-separated subset of pose, face,
-hand, iris, detector, palm, facedet) converts only those; the pose model's run also writes the
-demo portrait.
+hand, iris, detector, palm, facedet, selfie) converts only those; the pose model's run also
+writes the demo portrait.
 """
 import argparse
 import hashlib
@@ -83,7 +91,7 @@ SKIMAGE_ASTRONAUT_SHA256 = "88431cd9653ccd539741b555fb0a46b61558b301d4110412b5bc
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--skimage-wheel", required=True)
-    ap.add_argument("--models", default="pose,face,hand,iris,detector,palm,facedet")
+    ap.add_argument("--models", default="pose,face,hand,iris,detector,palm,facedet,selfie")
     args = ap.parse_args()
     wanted = set(args.models.split(","))
 
@@ -122,8 +130,89 @@ def main():
         detector(tf, ort, image, camera, os.path.join(modules, "pose_detection/pose_detection.tflite"), models)
     if "palm" in wanted:
         palm(tf, ort, os.path.join(modules, "palm_detection/palm_detection_full.tflite"), models)
+    if "selfie" in wanted:
+        selfie(tf, ort, image, os.path.join(modules, "selfie_segmentation/selfie_segmentation.tflite"), models)
     if "facedet" in wanted:
         face_detector(tf, ort, image, os.path.join(modules, "face_detection/face_detection_short_range.tflite"), models)
+
+
+def selfie(tf, ort, portrait, tflite, models):
+    import mediapipe
+    import onnx
+    import tf2onnx
+    from onnx import TensorProto, helper, numpy_helper
+    from PIL import Image
+    from tensorflow.lite.tools import flatbuffer_utils
+    model = flatbuffer_utils.read_model(tflite)
+    graph = model.subgraphs[0]
+    names = [t.name.decode() for t in graph.tensors]
+    custom = [i for i, op in enumerate(graph.operators)
+              if model.operatorCodes[op.opcodeIndex].customCode == b"Convolution2DTransposeBias"]
+    if len(custom) != 1:
+        sys.exit(f"selfie_segmentation: expected one Convolution2DTransposeBias, found {len(custom)}")
+    op = graph.operators[custom[0]]
+    features = names[op.inputs[0]]
+
+    def constant(dequantized):
+        # The kernel and bias are fp16 constants read through DEQUANTIZE ops.
+        producer = next(o for o in graph.operators if names[o.outputs[0]] == dequantized)
+        t = graph.tensors[producer.inputs[0]]
+        dtype = {1: np.float16, 0: np.float32}[t.type]
+        data = bytes(model.buffers[t.buffer].data)
+        return np.frombuffer(data, dtype=dtype).reshape(t.shape).astype(np.float32)
+
+    kernel = constant(names[op.inputs[1]])  # OHWI: [1, 2, 2, 16]
+    bias = constant(names[op.inputs[2]])
+    # Cut: everything up to the features the custom op reads.
+    graph.operators = [o for o in graph.operators[:custom[0]]
+                       if model.operatorCodes[o.opcodeIndex].builtinCode != 6 or
+                       names[o.outputs[0]] not in (names[op.inputs[1]], names[op.inputs[2]])]
+    graph.outputs = np.array([names.index(features)], dtype=np.int32)
+    with tempfile.TemporaryDirectory() as tmp:
+        cut = os.path.join(tmp, "cut.tflite")
+        flatbuffer_utils.write_model(model, cut)
+        proto, _ = tf2onnx.convert.from_tflite(cut, opset=17)
+        x = np.asarray(portrait.resize((256, 256), Image.BILINEAR), np.float32)[None] / 255.0
+        cut_features = run_tflite(tf, cut, x)
+    onnx_graph = proto.graph
+    out = onnx_graph.output[0].name
+    onnx_graph.initializer.append(
+        numpy_helper.from_array(np.transpose(kernel, (3, 0, 1, 2)).copy(), "segment_W"))
+    onnx_graph.initializer.append(numpy_helper.from_array(bias.reshape(1), "segment_B"))
+    onnx_graph.node.extend([
+        helper.make_node("Transpose", [out], ["segment_nchw"], perm=[0, 3, 1, 2]),
+        helper.make_node("ConvTranspose", ["segment_nchw", "segment_W", "segment_B"], ["segment"],
+                         strides=[2, 2], kernel_shape=[2, 2]),
+        helper.make_node("Sigmoid", ["segment"], ["probability"]),
+        helper.make_node("Transpose", ["probability"], ["segmentation"], perm=[0, 2, 3, 1]),
+    ])
+    del onnx_graph.output[:]
+    onnx_graph.output.append(
+        helper.make_tensor_value_info("segmentation", TensorProto.FLOAT, [1, 256, 256, 1]))
+    onnx.checker.check_model(proto)
+    onnx_bytes = proto.SerializeToString()
+    # The cut: the truncated TFLite graph and the custom op in NumPy against the ONNX model.
+    f = list(cut_features.values())[0][0]
+    up = np.zeros((256, 256), np.float32)
+    for dy in range(2):
+        for dx in range(2):
+            up[dy::2, dx::2] = f @ kernel[0, dy, dx, :] + bias[0]
+    expected = 1.0 / (1.0 + np.exp(-np.clip(up, -80, 80)))
+    session = ort.InferenceSession(onnx_bytes)
+    got = session.run(None, {session.get_inputs()[0].name: x})[0][0, :, :, 0]
+    worst = float(np.abs(got - expected).max())
+    if worst > 1e-4:
+        sys.exit(f"selfie_segmentation: ONNX differs from TFLite by {worst}")
+    # The op's meaning: MediaPipe's own solution on the demo portrait.
+    with mediapipe.solutions.selfie_segmentation.SelfieSegmentation(model_selection=0) as s:
+        theirs = s.process(np.asarray(portrait)).segmentation_mask
+    ours = np.asarray(Image.fromarray(got).resize(portrait.size, Image.BILINEAR))
+    a, b = theirs > 0.5, ours > 0.5
+    iou = float((a & b).sum() / max((a | b).sum(), 1))
+    if iou < 0.97:
+        sys.exit(f"selfie_segmentation: mask IoU {iou} against MediaPipe's solution")
+    print(f"selfie_segmentation: {worst:.1e} from TFLite at the cut, IoU {iou:.4f} with MediaPipe")
+    open(os.path.join(models, "selfie_segmentation.onnx"), "wb").write(onnx_bytes)
 
 
 def face_detector(tf, ort, portrait, tflite, models):
