@@ -7,7 +7,10 @@
 //! - `template`, per vertex: template Gaussian i sits on posed vertex i and turns with
 //!   q(T_i) ⊗ r, T_i its blended skinning matrix taken as given (roma's `rotmat_to_unitquat`),
 //!   renormalised;
+//! - `skinned`, per skinned Gaussian (beyond the body): μ = Σ w_k v_k + S·Δμ, r = q(S) ⊗ r,
+//!   S = Σ w_k S_k the blend of its vertices' skinning, renormalised;
 //! - `uv`, per UV Gaussian on triangle f: μ = σ_f·R_f·Δμ + Σ b_k v_k, r = q(R_f) ⊗ r, s = σ_f·s.
+//! The output holds the template Gaussians, then the skinned, then the UV ones.
 //! Only the posed vertices and their skinning rotations change per frame; everything else was
 //! uploaded once with the avatar.
 
@@ -15,7 +18,7 @@ struct RigParams {
     template_count: u32,
     uv_count: u32,
     triangle_count: u32,
-    _pad: u32,
+    skinned_count: u32,
 }
 
 // Activated attributes in the frame they are bound to (a vertex's skinning, a triangle's frame).
@@ -28,6 +31,16 @@ struct TemplateGaussian {
 struct UvGaussian {
     bary: vec3<f32>,
     triangle: u32,
+    offset: vec3<f32>,
+    opacity: f32,
+    rot: vec4<f32>,
+    scale: vec3<f32>,
+    _pad: f32,
+}
+
+struct SkinnedGaussian {
+    vertices: vec4<u32>,
+    weights: vec4<f32>,
     offset: vec3<f32>,
     opacity: f32,
     rot: vec4<f32>,
@@ -56,6 +69,7 @@ struct TriangleFrame {
 @group(0) @binding(4) var<storage, read> posed: array<PosedVertex>;
 @group(0) @binding(5) var<storage, read_write> frames: array<TriangleFrame>;
 @group(0) @binding(6) var<storage, read_write> gaussians: array<Gaussian>;
+@group(0) @binding(7) var<storage, read> skinned_gaussians: array<SkinnedGaussian>;
 
 // Hamilton product p ⊗ q of (w, x, y, z) quaternions.
 fn quat_mul(p: vec4<f32>, q: vec4<f32>) -> vec4<f32> {
@@ -162,5 +176,30 @@ fn uv_main(
     g.scale = u.scale * sigma;
     g.opacity = u.opacity;
     g._pad = 0.0;
-    gaussians[params.template_count + j] = g;
+    gaussians[params.template_count + params.skinned_count + j] = g;
+}
+
+@compute @workgroup_size(256)
+fn skinned_main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let id = flat_id(wid, nwg, lid, 256u);
+    let i = min(id, params.skinned_count - 1u);
+    let k = skinned_gaussians[i];
+    var anchor = vec3<f32>(0.0);
+    var skin = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+    for (var c = 0u; c < 4u; c++) {
+        let v = posed[k.vertices[c]];
+        anchor += k.weights[c] * v.position.xyz;
+        skin += v.skin * k.weights[c];
+    }
+    var g: Gaussian;
+    g.pos = anchor + skin * k.offset;
+    g.rot = quat_normalize(quat_mul(quat_from_matrix(skin), k.rot));
+    g.scale = k.scale;
+    g.opacity = k.opacity;
+    g._pad = 0.0;
+    gaussians[params.template_count + i] = g;
 }

@@ -409,6 +409,7 @@ fn animation_matches_the_reference_ubody_gaussian() {
                 features: floats("uv_features"),
             },
         },
+        skinned: Default::default(),
         outside: 0,
     };
     let (cases, _) = npz.indices("cases", &[None], 0..3).expect("cases");

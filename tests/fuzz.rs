@@ -132,6 +132,7 @@ fn tiny_avatar() -> guava::avatar::Avatar {
             offsets: vec![[0.0; 3]; 2],
             local: local(2),
         },
+        skinned: Default::default(),
         outside: 0,
     }
 }

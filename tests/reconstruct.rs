@@ -275,7 +275,8 @@ fn hidden_texels_get_no_colour_from_the_occluder() {
 
 /// A rigid motion of the body (the root turned, the whole translated) moves every Gaussian
 /// rigidly: on the bare body, and on a subject in a jacket with hair, whose avatar carries the
-/// clothing layer (displaced vertices) and Gaussians beyond the body bound to their triangles.
+/// clothing layer (displaced vertices) and Gaussians beyond the body skinned by the body around
+/// them.
 #[test]
 fn animation_follows_a_rigid_motion_exactly() {
     let body = body();
@@ -621,13 +622,18 @@ fn raster_tunings_agree_on_an_animated_avatar() {
 /// their skinning rotations alone; every Gaussian it writes matches the CPU rig (`Rig::animate`)
 /// within 1e-5 (positions in metres, quaternion components, scales in metres, opacities), for
 /// the demo motion's wave, a pose with every joint turned by 2.8 rad about a skewed axis, and
-/// after a second avatar took the splatter's buffers; and the images agree.
+/// after a second avatar took the splatter's buffers; and the images agree. The subject wears a
+/// jacket and hair, so every kind of Gaussian is drawn: template, UV and beyond the body.
 #[test]
 fn the_gpu_rig_matches_the_cpu_rig() {
     use guava::render::{GpuAvatar, HeadlessRenderer};
     let body = body();
-    let (view, image) = rest_photo();
+    let (view, _) = rest_photo();
+    let image = guava::synthetic::Subject::clothed_and_haired(body)
+        .photo(&view.pose, &view.camera, guava::synthetic::subject_texture)
+        .expect("photo");
     let (avatar, _) = reconstruct(&view, &image).expect("reconstruct");
+    assert!(avatar.skinned.len() > 1_000, "{}", avatar.skinned.len());
     let motion = guava::tracking::demo_motion().expect("demo motion");
     let mut wave = BodyPose::rest(body);
     guava::tracking::Retarget::new(&motion, body).sample(&motion, 6.45, &mut wave);
@@ -644,7 +650,7 @@ fn the_gpu_rig_matches_the_cpu_rig() {
         Some(&body.weld),
     );
     // Both draw what the photo showed (the rest photo leaves out the hands and feet).
-    let shown = avatar.template.len() + avatar.shown_uv(false);
+    let shown = avatar.template.len() + avatar.skinned.len() + avatar.shown_uv(false);
     assert!(shown < avatar.len());
     assert_eq!(gpu_avatar.len(), shown);
     let other = guava::gaussians::synthetic::torus_knot(200_000, 2);

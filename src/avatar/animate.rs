@@ -2,6 +2,8 @@
 //! digested in notes/guava-pipeline.md §5):
 //! - template Gaussian i: μ = posed vertex i, r = q(T_i) ⊗ r_local with T_i its blended skinning
 //!   matrix (not orthonormalised, as roma's `rotmat_to_unitquat` takes it), renormalised;
+//! - skinned Gaussian (ours, beyond the body): μ = Σ w_k v_k + S·Δμ, r = q(S) ⊗ r_local with S
+//!   = Σ w_k S_k its vertices' blended skinning (linear parts), renormalised;
 //! - UV Gaussian on triangle f: μ = σ_f·R_f·Δμ + Σ b_k v_k, r = q(R_f) ⊗ r_local, s = σ_f·s_local.
 
 use glam::{Mat3A, Vec3};
@@ -76,6 +78,23 @@ impl Rig {
         out.opacities.extend_from_slice(&t.opacities);
         out.features.extend_from_slice(&t.features);
 
+        let k = &avatar.skinned;
+        for ((v, w), (offset, &r)) in k
+            .vertices
+            .iter()
+            .zip(&k.weights)
+            .zip(k.offsets.iter().zip(&k.local.rotations))
+        {
+            let (anchor, skin) = blend(v, w, vertices, posed);
+            out.positions
+                .push((anchor + skin * Vec3::from(*offset)).to_array());
+            out.rotations
+                .push(normalize(quat_mul(quat_from_matrix(skin), r)));
+        }
+        out.scales.extend_from_slice(&k.local.scales);
+        out.opacities.extend_from_slice(&k.local.opacities);
+        out.features.extend_from_slice(&k.local.features);
+
         triangle_frames(vertices, triangles, &mut self.frames);
         let uv = &avatar.uv;
         let shown = avatar.shown_uv(false);
@@ -102,6 +121,18 @@ impl Rig {
             .extend_from_slice(&uv.local.features[..shown * avatar.channels]);
         Ok(())
     }
+}
+
+/// The weighted mean of vertices `v` (`weights` w) of the dressed posed body and their blended
+/// skinning's linear part: where a skinned Gaussian is anchored and what turns it.
+pub fn blend(v: &[u32; 4], w: &[f32; 4], vertices: &[Vec3], posed: &PosedBody) -> (Vec3, Mat3A) {
+    let mut anchor = Vec3::ZERO;
+    let mut skin = Mat3A::ZERO;
+    for (&k, &weight) in v.iter().zip(w) {
+        anchor += weight * vertices[k as usize];
+        skin += posed.skin[k as usize].matrix3 * weight;
+    }
+    (anchor, skin)
 }
 
 /// Hamilton product p ⊗ q of (w, x, y, z) quaternions.

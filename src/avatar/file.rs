@@ -4,8 +4,10 @@
 //! Layout: `guava-rs avatar 2\n`, the header (one line of JSON), `\n`, then the template arrays
 //! (rotations 4, scales 3, opacities 1, features C per Gaussian), the UV arrays (triangles
 //! u32, barycentrics 3, offsets 3, rotations 4, scales 3, opacities 1, features C) and, when the
-//! header says `displaced`, one displacement per body vertex; each array contiguous in that
-//! order. Version 2 added the source view and the displacements; version 1 files still read.
+//! header says `displaced`, one displacement per body vertex, then the skinned arrays (vertices
+//! 4 u32, weights 4, offsets 3, rotations 4, scales 3, opacities 1, features C); each array
+//! contiguous in that order. Version 2 added the source view and the displacements, version 3
+//! the skinned Gaussians; earlier files still read.
 
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -15,15 +17,16 @@ use serde::{Deserialize, Serialize};
 
 use glam::{Mat4, Vec3};
 
-use super::{Avatar, AvatarKind, LocalGaussians, UvGaussians};
+use super::{Avatar, AvatarKind, LocalGaussians, SkinnedGaussians, UvGaussians};
 use crate::body::BodyPose;
 use crate::camera::Camera;
 use crate::gaussians::{MAX_CHANNELS, MIN_CHANNELS};
 use crate::photo::Crop;
 use crate::tracking::{EhmIdentityRecord, SourceView};
 
-pub const AVATAR_FORMAT: &str = "guava-rs avatar 2";
-/// Files before the source view and displacements.
+pub const AVATAR_FORMAT: &str = "guava-rs avatar 3";
+/// Files before the skinned Gaussians, and before the source view and displacements.
+const AVATAR_FORMAT_2: &str = "guava-rs avatar 2";
 const AVATAR_FORMAT_1: &str = "guava-rs avatar 1";
 
 #[derive(Debug, thiserror::Error)]
@@ -54,6 +57,9 @@ struct Header {
     outside: usize,
     template_gaussians: usize,
     uv_gaussians: usize,
+    /// Version 3.
+    #[serde(default)]
+    skinned_gaussians: usize,
 }
 
 /// A [`SourceView`] as the header stores it: the pose in the bound body's joint and parameter
@@ -163,6 +169,7 @@ impl Avatar {
             outside: self.outside,
             template_gaussians: self.template.len(),
             uv_gaussians: self.uv.local.len(),
+            skinned_gaussians: self.skinned.len(),
         };
         let json = serde_json::to_string(&header).map_err(|e| error(path, e.to_string()))?;
         crate::atomic_file::write_atomic(path, |out| {
@@ -174,7 +181,12 @@ impl Avatar {
             write_f32(out, uv.barycentrics.iter().flatten())?;
             write_f32(out, uv.offsets.iter().flatten())?;
             write_local(out, &uv.local)?;
-            write_f32(out, self.displacements.iter())
+            write_f32(out, self.displacements.iter())?;
+            let k = &self.skinned;
+            write_words(out, k.vertices.iter().flatten().copied())?;
+            write_f32(out, k.weights.iter().flatten())?;
+            write_f32(out, k.offsets.iter().flatten())?;
+            write_local(out, &k.local)
         })
         .map_err(|e| error(path, format!("cannot write: {e}")))
     }
@@ -192,9 +204,13 @@ impl Avatar {
         };
         let mut lines = bytes.splitn(3, |&b| b == b'\n');
         let version = lines.next().unwrap_or_default();
-        if version != AVATAR_FORMAT.as_bytes() && version != AVATAR_FORMAT_1.as_bytes() {
+        if ![AVATAR_FORMAT, AVATAR_FORMAT_2, AVATAR_FORMAT_1]
+            .iter()
+            .any(|v| version == v.as_bytes())
+        {
             return Err(fail(format!(
-                "not an avatar file (the first line is not {AVATAR_FORMAT:?} or {AVATAR_FORMAT_1:?})"
+                "not an avatar file (the first line is not {AVATAR_FORMAT:?}, {AVATAR_FORMAT_2:?} \
+                 or {AVATAR_FORMAT_1:?})"
             )));
         }
         let header: Header = serde_json::from_slice(lines.next().unwrap_or_default())
@@ -204,6 +220,11 @@ impl Avatar {
         {
             return Err(fail(
                 "header: a version 1 file has no source_view or displaced".into(),
+            ));
+        }
+        if version != AVATAR_FORMAT.as_bytes() && header.skinned_gaussians > 0 {
+            return Err(fail(
+                "header: only a version 3 file has skinned_gaussians".into(),
             ));
         }
         let body = lines.next().unwrap_or_default();
@@ -219,18 +240,25 @@ impl Avatar {
                 header.template_gaussians, header.body_vertices
             )));
         }
-        let (nt, nu) = (header.template_gaussians, header.uv_gaussians);
+        let (nt, nu, ns) = (
+            header.template_gaussians,
+            header.uv_gaussians,
+            header.skinned_gaussians,
+        );
         let nd = if header.displaced {
             header.body_vertices
         } else {
             0
         };
         // Counted in u128: a hostile header's counts must not overflow into a small size.
-        let words =
-            nt as u128 * (8 + c as u128) + nu as u128 * (1 + 3 + 3 + 8 + c as u128) + nd as u128;
+        let words = nt as u128 * (8 + c as u128)
+            + nu as u128 * (1 + 3 + 3 + 8 + c as u128)
+            + nd as u128
+            + ns as u128 * (4 + 4 + 3 + 8 + c as u128);
         if body.len() as u128 != 4 * words {
             return Err(fail(format!(
-                "the arrays take {} bytes, expected {} for {nt} template and {nu} UV Gaussians with {c} channels{}",
+                "the arrays take {} bytes, expected {} for {nt} template, {nu} UV and {ns} skinned \
+                 Gaussians with {c} channels{}",
                 body.len(),
                 4 * words,
                 if nd > 0 {
@@ -247,6 +275,16 @@ impl Avatar {
         let offsets = reader.arrays(nu);
         let local = read_local(&mut reader, nu, c);
         let displacements = reader.f32s(nd);
+        let skinned = SkinnedGaussians {
+            vertices: reader
+                .u32s(4 * ns)
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect(),
+            weights: reader.arrays(ns),
+            offsets: reader.arrays(ns),
+            local: read_local(&mut reader, ns, c),
+        };
         let source_view = header
             .source_view
             .map(ViewRecord::view)
@@ -270,6 +308,7 @@ impl Avatar {
                 offsets,
                 local,
             },
+            skinned,
             outside: header.outside,
         };
         avatar.validate().map_err(fail)?;
@@ -303,6 +342,26 @@ impl Avatar {
                 self.uv.triangles[i], self.body_triangles
             ));
         }
+        let k = &self.skinned;
+        if let Some(i) = k
+            .vertices
+            .iter()
+            .position(|v| v.iter().any(|&v| v as usize >= self.body_vertices))
+        {
+            return Err(format!(
+                "skinned vertices[{i}] is {:?}, but the body has {} vertices",
+                k.vertices[i], self.body_vertices
+            ));
+        }
+        if let Some(i) = k.weights.iter().position(|w| {
+            let sum: f32 = w.iter().sum();
+            w.iter().any(|x| !(x.is_finite() && *x >= 0.0)) || (sum - 1.0).abs() > 1e-3
+        }) {
+            return Err(format!(
+                "skinned weights[{i}] is {:?}: weights are ≥ 0 and sum to 1",
+                k.weights[i]
+            ));
+        }
         let finite = |name: &str, values: &mut dyn Iterator<Item = f32>| match values
             .enumerate()
             .find(|(_, v)| !v.is_finite())
@@ -310,7 +369,11 @@ impl Avatar {
             Some((i, v)) => Err(format!("{name} value {i} is {v}")),
             None => Ok(()),
         };
-        for (set, g) in [("template", &self.template), ("uv", &self.uv.local)] {
+        for (set, g) in [
+            ("template", &self.template),
+            ("uv", &self.uv.local),
+            ("skinned", &self.skinned.local),
+        ] {
             finite(
                 &format!("{set} rotations"),
                 &mut g.rotations.iter().flatten().copied(),
@@ -338,6 +401,7 @@ impl Avatar {
             &mut self.uv.barycentrics.iter().flatten().copied(),
         )?;
         finite("uv offsets", &mut self.uv.offsets.iter().flatten().copied())?;
+        finite("skinned offsets", &mut k.offsets.iter().flatten().copied())?;
         if !self.displacements.is_empty() && self.displacements.len() != self.body_vertices {
             return Err(format!(
                 "{} displacements for a body of {} vertices (one per vertex)",

@@ -15,7 +15,7 @@ mod dress;
 pub mod file;
 mod preview;
 
-pub use animate::{BodyMismatch, Rig, quat_from_matrix, quat_mul};
+pub use animate::{BodyMismatch, Rig, blend, quat_from_matrix, quat_mul};
 pub use dress::Dressing;
 pub use file::{AVATAR_FORMAT, AvatarFileError};
 
@@ -91,6 +91,34 @@ impl UvGaussians {
     }
 }
 
+/// Gaussians skinned by a blend of body vertices: what lies beyond the body (hair, loose
+/// clothing, a held object). Each follows the weighted mean of up to four posed vertices,
+/// turned by their blended skinning, so it moves as the body surface around it does (clothed-
+/// avatar methods diffuse skinning weights from the body this way) rather than rigidly with one
+/// triangle: μ = Σ w_k v_k + S·Δμ, r = q(S) ⊗ r, S = Σ w_k S_k the blended skinning's linear
+/// part (taken as given, as for the template Gaussians).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SkinnedGaussians {
+    /// Up to four body vertices each; unused slots have weight 0.
+    pub vertices: Vec<[u32; 4]>,
+    /// Summing to 1.
+    pub weights: Vec<[f32; 4]>,
+    /// From the vertices' weighted mean, in the blended skinning's rest frame (metres).
+    pub offsets: Vec<[f32; 3]>,
+    /// Rotations relative to the blended skinning's; scales in metres.
+    pub local: LocalGaussians,
+}
+
+impl SkinnedGaussians {
+    pub fn len(&self) -> usize {
+        self.local.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.local.is_empty()
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Avatar {
     pub kind: AvatarKind,
@@ -116,6 +144,9 @@ pub struct Avatar {
     /// One per body vertex, in vertex order; rotations relative to the vertex's skinning rotation.
     pub template: LocalGaussians,
     pub uv: UvGaussians,
+    /// What lies beyond the body ([`SkinnedGaussians`]); drawn after the template Gaussians and
+    /// before the UV Gaussians.
+    pub skinned: SkinnedGaussians,
     /// How many of the last UV Gaussians lie on body parts the photo did not show (below an
     /// upper-body portrait's edge): neutral grey, and drawn only when asked
     /// ([`Avatar::shown_uv`]), so the avatar is an upper-body avatar as GUAVA's is.
@@ -159,6 +190,26 @@ impl Avatar {
         }
     }
 
+    /// The pose a motion starts from: the avatar's photo's (when it keeps its source view), so
+    /// that joints the motion does not drive stay as the photo shows them (an arm it hid,
+    /// resting along the body) rather than in the template's rest pose, which no person stands
+    /// in (the default body's arms out at 45°: the demo avatar's suit swung out with them like
+    /// wings); the identity applied.
+    pub fn base_pose(&self, body: &impl Posable) -> BodyPose {
+        let rest = BodyPose::rest(body);
+        let mut pose = match &self.source_view {
+            Some(view)
+                if view.pose.rotations.len() == rest.rotations.len()
+                    && view.pose.coefficients.len() == rest.coefficients.len() =>
+            {
+                view.pose.clone()
+            }
+            _ => rest,
+        };
+        self.apply_identity(body, &mut pose);
+        pose
+    }
+
     /// Builds `body` with the avatar's EHM identity (the neutral one when it carries none), as
     /// every pose of the avatar needs.
     pub fn apply_ehm_identity(&self, body: &mut EhmModel) {
@@ -169,7 +220,18 @@ impl Avatar {
     }
 
     pub fn len(&self) -> usize {
-        self.template.len() + self.uv.local.len()
+        self.template.len() + self.skinned.len() + self.uv.local.len()
+    }
+
+    /// Its Gaussians by set, as every report writes them: "15066 template + 39003 beyond the
+    /// body + 125883 UV".
+    pub fn composition(&self) -> String {
+        format!(
+            "{} template + {} beyond the body + {} UV",
+            self.template.len(),
+            self.skinned.len(),
+            self.uv.local.len()
+        )
     }
 
     /// The UV Gaussians drawn: all of them with `outside`, else those on what the photo showed.

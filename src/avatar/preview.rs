@@ -8,7 +8,7 @@
 
 use std::collections::BTreeMap;
 
-use super::{Avatar, LocalGaussians, UvGaussians};
+use super::{Avatar, LocalGaussians, SkinnedGaussians, UvGaussians};
 
 /// Gaussians of one triangle are pooled when their offsets from it fall in the same cell of this
 /// side (the triangle's local units: about metres).
@@ -36,7 +36,7 @@ impl Avatar {
         let mut outside_count = 0;
         for ((outside, t, _), members) in groups {
             outside_count += usize::from(outside);
-            let first = members[0];
+
             let n = members.len() as f32;
             let mean = |get: &dyn Fn(usize) -> [f32; 3]| {
                 members.iter().fold([0.0; 3], |acc, &i| {
@@ -47,27 +47,26 @@ impl Avatar {
             out.triangles.push(t);
             out.barycentrics.push(mean(&|i| uv.barycentrics[i]));
             out.offsets.push(mean(&|i| uv.offsets[i]));
-            let local = &mut out.local;
-            local.rotations.push(uv.local.rotations[first]);
-            local
-                .scales
-                .push(uv.local.scales[first].map(|s| s * n.sqrt()));
-            local.opacities.push(
-                members
-                    .iter()
-                    .map(|&i| uv.local.opacities[i])
-                    .fold(0.0, f32::max),
-            );
-            let start = local.features.len();
-            local.features.resize(start + c, 0.0);
-            for &i in &members {
-                for (acc, v) in local.features[start..]
-                    .iter_mut()
-                    .zip(&uv.local.features[i * c..(i + 1) * c])
-                {
-                    *acc += v / n;
-                }
-            }
+            pool(&uv.local, c, &members, &mut out.local);
+        }
+        // Skinned Gaussians pooled alike, by their first vertex and a cell of their offsets.
+        let k = &self.skinned;
+        let mut groups: BTreeMap<(u32, [i32; 3]), Vec<usize>> = BTreeMap::new();
+        for (i, v) in k.vertices.iter().enumerate() {
+            let cell = k.offsets[i].map(|o| (o / GROUP_CELL).floor() as i32);
+            groups.entry((v[0], cell)).or_default().push(i);
+        }
+        let mut skinned = SkinnedGaussians::default();
+        for members in groups.into_values() {
+            let n = members.len() as f32;
+            skinned.vertices.push(k.vertices[members[0]]);
+            skinned.weights.push(k.weights[members[0]]);
+            skinned
+                .offsets
+                .push(members.iter().fold([0.0; 3], |acc, &i| {
+                    [0, 1, 2].map(|a| acc[a] + k.offsets[i][a] / n)
+                }));
+            pool(&k.local, c, &members, &mut skinned.local);
         }
         Avatar {
             kind: self.kind,
@@ -82,14 +81,39 @@ impl Avatar {
             displacements: self.displacements.clone(),
             template: LocalGaussians::default(),
             uv: out,
+            skinned,
             outside: outside_count,
+        }
+    }
+}
+
+/// One Gaussian for `members` of `local` (`c` channels) into `out`: the first one's rotation,
+/// its scale enlarged by √n, the largest opacity, the mean features.
+fn pool(local: &LocalGaussians, c: usize, members: &[usize], out: &mut LocalGaussians) {
+    let (first, n) = (members[0], members.len() as f32);
+    out.rotations.push(local.rotations[first]);
+    out.scales.push(local.scales[first].map(|s| s * n.sqrt()));
+    out.opacities.push(
+        members
+            .iter()
+            .map(|&i| local.opacities[i])
+            .fold(0.0, f32::max),
+    );
+    let start = out.features.len();
+    out.features.resize(start + c, 0.0);
+    for &i in members {
+        for (acc, v) in out.features[start..]
+            .iter_mut()
+            .zip(&local.features[i * c..(i + 1) * c])
+        {
+            *acc += v / n;
         }
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use crate::avatar::{Avatar, AvatarKind, LocalGaussians, UvGaussians};
+    use crate::avatar::{Avatar, AvatarKind, LocalGaussians, SkinnedGaussians, UvGaussians};
 
     #[test]
     fn one_splat_per_triangle_with_the_mean_colour_and_the_area_of_all() {
@@ -122,6 +146,13 @@ mod tests {
                 offsets: vec![[0.0; 3]; 4],
                 local: local(4, vec![0.0, 1.0, 2.0, 3.0]),
             },
+            // Two beyond the body near vertex 0 pool; a third 5 cm off stays apart.
+            skinned: SkinnedGaussians {
+                vertices: vec![[0, 1, 0, 0], [0, 2, 0, 0], [0, 1, 0, 0]],
+                weights: vec![[0.5, 0.5, 0.0, 0.0]; 3],
+                offsets: vec![[0.001, 0.0, 0.0], [0.003, 0.0, 0.0], [0.051, 0.0, 0.0]],
+                local: local(3, vec![2.0, 4.0, 8.0]),
+            },
             outside: 0,
         };
         let p = avatar.preview();
@@ -131,5 +162,8 @@ mod tests {
         assert_eq!(p.uv.barycentrics, vec![[0.5, 0.25, 0.25]]);
         assert_eq!(p.uv.local.scales, vec![[0.2, 0.02, 0.2]]);
         assert!((p.uv.local.opacities[0] - 0.8).abs() < 1e-6);
+        assert_eq!(p.skinned.local.features, vec![3.0, 8.0]);
+        assert!((p.skinned.offsets[0][0] - 0.002).abs() < 1e-7);
+        assert_eq!(p.skinned.vertices[0], [0, 1, 0, 0]);
     }
 }

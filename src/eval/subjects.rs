@@ -1,7 +1,8 @@
 //! Fidelity with known answers: each synthetic subject ([`crate::synthetic::Subject`]) is
 //! photographed from the front, reconstructed from that photo with its exact view, and the avatar
-//! is compared with the subject itself drawn from the source view, from novel views (yaw ±30°
-//! and ±60°) and in a new pose (the demo motion's wave).
+//! is compared with the subject itself drawn from the source view, from novel views (yaw ±30°,
+//! ±60°, the side and the back) and in a new pose (the demo motion's wave, from the front and
+//! from 60°).
 
 use glam::Vec3;
 
@@ -14,13 +15,16 @@ use crate::synthetic::{Material, Subject, subject_texture, upper_body_camera};
 use crate::tracking::{Retarget, SourceView, demo_motion};
 
 /// Where a subject is compared: its photo's view, turned views, a new pose.
-pub const VIEWS: [(&str, f32, bool); 6] = [
+pub const VIEWS: [(&str, f32, bool); 9] = [
     ("source", 0.0, false),
     ("yaw −30°", -30.0, false),
     ("yaw +30°", 30.0, false),
     ("yaw −60°", -60.0, false),
     ("yaw +60°", 60.0, false),
+    ("yaw +90° (side)", 90.0, false),
+    ("yaw 180° (back)", 180.0, false),
     ("new pose (wave)", 0.0, true),
+    ("wave from +60°", 60.0, true),
 ];
 
 /// What went wrong with a subject: reconstructing it, or comparing.

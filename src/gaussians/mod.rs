@@ -114,14 +114,38 @@ impl GaussianCloud {
         }
     }
 
-    /// Axis-aligned bounds of the finite centres, for framing a camera; `None` if there are none.
+    /// Axis-aligned bounds of the finite centres of the Gaussians that show (opacity at least
+    /// 1/255: an avatar keeps the parts its photo did not show, transparent, and framing on
+    /// them would put the person at the picture's top), for framing a camera; `None` if none
+    /// shows.
     pub fn bounds(&self) -> Option<(glam::Vec3, glam::Vec3)> {
         let mut it = self
             .positions
             .iter()
-            .map(|p| glam::Vec3::from(*p))
+            .zip(&self.opacities)
+            .filter(|&(_, &o)| o >= 1.0 / 255.0)
+            .map(|(p, _)| glam::Vec3::from(*p))
             .filter(|p| p.is_finite());
         let first = it.next()?;
         Some(it.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p))))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn bounds_frame_what_shows() {
+        let mut cloud = GaussianCloud::new(3);
+        let (rotation, scale, colour) = ([1.0, 0.0, 0.0, 0.0], [0.01; 3], [0.5; 3]);
+        cloud.push([0.0, 0.0, 0.0], rotation, scale, 0.9, &colour);
+        cloud.push([1.0, 2.0, 0.5], rotation, scale, 0.9, &colour);
+        cloud.push([0.0, -9.0, 0.0], rotation, scale, 0.0, &colour);
+        cloud.push([f32::NAN, 0.0, 0.0], rotation, scale, 0.9, &colour);
+        assert_eq!(cloud.bounds(), Some((Vec3::ZERO, Vec3::new(1.0, 2.0, 0.5))));
+        cloud.opacities[..2].fill(0.0);
+        assert_eq!(cloud.bounds(), None);
     }
 }

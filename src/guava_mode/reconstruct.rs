@@ -186,6 +186,7 @@ pub fn reconstruct_guava(
         displacements: Vec::new(),
         template,
         uv: gaussians,
+        skinned: Default::default(),
         outside: 0,
     };
     report.timings = clock.finish();

@@ -20,8 +20,14 @@ pub const DETECTOR_MODEL_PATH: &str = concat!(
     "/assets/models/pose_detection.onnx"
 );
 pub const DETECTOR_INPUT: usize = 224;
-/// MediaPipe's pose solution's default detection confidence.
-const MIN_SCORE: f32 = 0.5;
+/// MediaPipe's pose solution's default detection confidence: the person made into the avatar
+/// or tracked scores this.
+pub const MIN_SCORE: f32 = 0.5;
+/// Other people are told apart from them at this score (the composite of two portraits in
+/// tests/data/photos scores its second person 0.33).
+const OTHER_SCORE: f32 = 0.3;
+/// The most people looked for on one photo.
+const MAX_PEOPLE: usize = 4;
 
 /// A person found on a photo.
 #[derive(Clone, Debug, PartialEq)]
@@ -66,15 +72,37 @@ impl PoseDetector {
         self.model.decode(boxes, logits, MIN_SCORE, 1).pop()
     }
 
-    /// The most confident person on a square source image, `None` if nobody scores 0.5.
-    pub fn detect(&mut self, source: &SourceImage) -> Result<Option<PersonDetection>, OnnxError> {
-        Ok(self.model.detect(source, MIN_SCORE, 1)?.pop().map(|d| {
-            let k = &d.keypoints;
-            PersonDetection {
-                score: d.score,
-                keypoints: [k[0], k[1], k[2], k[3]],
-                roi: Roi::person(k[0], k[1]),
-            }
-        }))
+    /// The people on a square source image who score [`MIN_SCORE`], then the others who score
+    /// [`OTHER_SCORE`] (up to four in all), most confident first.
+    pub fn detect(&mut self, source: &SourceImage) -> Result<Vec<PersonDetection>, OnnxError> {
+        Ok(self
+            .model
+            .detect_tiers(source, &[MIN_SCORE, OTHER_SCORE], MAX_PEOPLE)?
+            .into_iter()
+            .map(|d| {
+                let k = &d.keypoints;
+                PersonDetection {
+                    score: d.score,
+                    keypoints: [k[0], k[1], k[2], k[3]],
+                    roi: Roi::person(k[0], k[1]),
+                }
+            })
+            .collect())
+    }
+}
+
+impl PersonDetection {
+    /// Of `people` on a `side`² image who score [`MIN_SCORE`], the one whose shoulders' middle
+    /// is nearest its centre: the one a photo of several is of (a group's most confident
+    /// detection is often the largest or the sharpest, not the subject).
+    pub fn central(people: &[Self], side: f32) -> Option<&Self> {
+        let centre = Vec2::splat(0.5 * side);
+        people
+            .iter()
+            .filter(|p| p.score >= MIN_SCORE)
+            .min_by(|a, b| {
+                let d = |p: &Self| p.keypoints[2].distance_squared(centre);
+                d(a).total_cmp(&d(b))
+            })
     }
 }

@@ -16,6 +16,7 @@ mod model;
 mod palm;
 mod pose;
 mod roi;
+mod selfie;
 mod simcc;
 mod ssd;
 mod wholebody;
@@ -32,6 +33,7 @@ pub use model::Rgb8;
 pub use palm::{PALM_INPUT, PALM_MODEL_PATH, PalmDetection, PalmDetector};
 pub use pose::{COCO_FROM_MEDIAPIPE, POSE_INPUT, POSE_MODEL_PATH, PoseKeypoints, PoseLandmarker};
 pub use roi::Roi;
+pub use selfie::{SELFIE_INPUT, SELFIE_MODEL_PATH, Segmentation, SelfieSegmenter};
 pub use simcc::{SimccCrop, SimccLandmarker, SimccPoints};
 pub use ssd::Detection;
 pub use wholebody::{WHOLEBODY_FILES, Wholebody, WholebodyPoints};
@@ -85,6 +87,12 @@ pub struct Detections {
     /// source pixels; [`WholebodyPoints::person`]); `None` with MediaPipe's or when YOLOX
     /// found nobody.
     pub person: Option<[f32; 4]>,
+    /// The selfie model's person mask, where it ran (the photo path; a video's later frames
+    /// need none).
+    pub segmentation: Option<Segmentation>,
+    /// The pose model on the other people the detector found (the photo path): their masks
+    /// keep them out of this person's.
+    pub others: Vec<PoseKeypoints>,
 }
 
 impl Detections {
@@ -96,13 +104,44 @@ impl Detections {
             hands: Vec::new(),
             irises: Vec::new(),
             person: None,
+            segmentation: None,
+            others: Vec::new(),
         }
+    }
+
+    /// The person's mask over a `side`² source image: the selfie model's where it ran, split
+    /// from the other people's by the pose model's masks where they touch (each pixel goes to
+    /// whose pose mask is nearer), and only its parts the pose model's person overlaps (another
+    /// person beside them is left out); else the pose model's own segmentation; parts too
+    /// small to be the person cleared.
+    pub fn person_mask(&self, side: usize) -> Vec<f32> {
+        let pose = self.pose.mask_at(side);
+        let mut mask = match &self.segmentation {
+            Some(s) => {
+                let mut mask = s.mask_at(side);
+                let person: Vec<bool> = pose.iter().map(|&m| m >= 0.5).collect();
+                if !self.others.is_empty() {
+                    let mut others = vec![false; side * side];
+                    for other in &self.others {
+                        for (o, m) in others.iter_mut().zip(other.mask_at(side)) {
+                            *o |= m >= 0.5;
+                        }
+                    }
+                    crate::photo::keep_nearer(&mut mask, side, &person, &others);
+                }
+                crate::photo::keep_parts_touching(&mut mask, side, &person);
+                mask
+            }
+            None => pose,
+        };
+        crate::photo::keep_person(&mut mask, side);
+        mask
     }
 }
 
 /// Where the shipped models are, and the file names [`Landmarkers::load_dir`] looks for.
 pub const MODELS_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/models");
-pub const MODEL_FILES: [&str; 7] = [
+pub const MODEL_FILES: [&str; 8] = [
     "pose_detection.onnx",
     "pose_landmark_full.onnx",
     "face_landmark.onnx",
@@ -110,6 +149,7 @@ pub const MODEL_FILES: [&str; 7] = [
     "iris_landmark.onnx",
     "palm_detection_full.onnx",
     "face_detection_short_range.onnx",
+    "selfie_segmentation.onnx",
 ];
 
 /// The keypoint models, loaded once and run on each photo.
@@ -121,6 +161,7 @@ pub struct Landmarkers {
     pub iris: IrisLandmarker,
     pub palm: PalmDetector,
     pub face_detector: FaceDetector,
+    pub selfie: SelfieSegmenter,
     /// EHM-Tracker's models, when given: they place the body and hand points instead of
     /// MediaPipe's pose and hand models ([`Self::detect`]).
     pub wholebody: Option<Wholebody>,
@@ -137,8 +178,16 @@ impl Landmarkers {
     /// one error; each file is checked for its model's inputs and outputs.
     pub fn load_dir(runtime: &OnnxRuntime, dir: &Path) -> Result<Self, OnnxError> {
         check_folder(dir, &MODEL_FILES, "the keypoint model folder")?;
-        let [detector, pose, face, hand, iris, palm, face_detector] =
-            MODEL_FILES.map(|f| dir.join(f));
+        let [
+            detector,
+            pose,
+            face,
+            hand,
+            iris,
+            palm,
+            face_detector,
+            selfie,
+        ] = MODEL_FILES.map(|f| dir.join(f));
         Ok(Self {
             detector: PoseDetector::load_from(runtime, &detector)?,
             pose: PoseLandmarker::load_from(runtime, &pose)?,
@@ -147,6 +196,7 @@ impl Landmarkers {
             iris: IrisLandmarker::load_from(runtime, &iris)?,
             palm: PalmDetector::load_from(runtime, &palm)?,
             face_detector: FaceDetector::load_from(runtime, &face_detector)?,
+            selfie: SelfieSegmenter::load_from(runtime, &selfie)?,
             wholebody: None,
         })
     }
@@ -171,18 +221,43 @@ impl Landmarkers {
     /// so a person off-centre or in profile is framed as the model was trained, while a portrait
     /// that the person fills shrinks to a corner of it: on the demo portrait the whole photo
     /// gives 11 confident COCO points against the crop's 7, on the cameraman (tests/data) the
-    /// crop gives 13 where the whole photo misreads him.
+    /// crop gives 13 where the whole photo misreads him. With several people on the photo, the
+    /// one nearest its centre ([`PersonDetection::central`]), and their count in
+    /// [`PoseKeypoints::people`].
     pub fn pose(&mut self, source: &SourceImage) -> Result<PoseKeypoints, OnnxError> {
-        let whole = self.pose.detect(source, None)?;
-        let Some(person) = self.detector.detect(source)? else {
-            return Ok(whole);
+        Ok(self.people(source, false)?.0)
+    }
+
+    /// [`Self::pose`], and with `others` the pose model on each other person the detector
+    /// found too.
+    fn people(
+        &mut self,
+        source: &SourceImage,
+        others: bool,
+    ) -> Result<(PoseKeypoints, Vec<PoseKeypoints>), OnnxError> {
+        let people = self.detector.detect(source)?;
+        let mut whole = self.pose.detect(source, None)?;
+        whole.people = people.len();
+        let Some(person) = PersonDetection::central(&people, source.size as f32) else {
+            return Ok((whole, Vec::new()));
         };
-        let cropped = self.pose.detect(source, Some(person.roi))?;
-        Ok(if cropped.seen() > whole.seen() {
-            cropped
-        } else {
-            whole
-        })
+        let mut cropped = self.pose.detect(source, Some(person.roi))?;
+        cropped.people = people.len();
+        // With several people the whole photo's pose may be anyone's: the central one's crop
+        // decides wherever it sees them at all.
+        let several = people.len() > 1 && cropped.seen() > 1.0;
+        let pose = match several || cropped.seen() > whole.seen() {
+            true => cropped,
+            false => whole,
+        };
+        let mut rest = Vec::new();
+        for other in people
+            .iter()
+            .filter(|p| others && !std::ptr::eq(*p, person))
+        {
+            rest.push(self.pose.detect(source, Some(other.roi))?);
+        }
+        Ok((pose, rest))
     }
 
     /// The pose pipeline on the photo, then the face and hand models where it puts them (and
@@ -191,7 +266,7 @@ impl Landmarkers {
     /// theirs; the pose model still gives the person's presence and mask, and the face crop
     /// is placed by the body points in use.
     pub fn detect(&mut self, source: &SourceImage) -> Result<Detections, OnnxError> {
-        let mut pose = self.pose(source)?;
+        let (mut pose, others) = self.people(source, true)?;
         let mut hands = Vec::new();
         let mut person = None;
         if let Some(wholebody) = &mut self.wholebody {
@@ -210,13 +285,26 @@ impl Landmarkers {
             Some(face) => self.iris.detect(source, face)?,
             None => Vec::new(),
         };
+        let segmentation = Some(self.selfie.segment(source)?);
         Ok(Detections {
             pose,
             face,
             hands,
             irises,
             person,
+            segmentation,
+            others,
         })
+    }
+
+    /// Only what a person mask needs: the pose pipeline's person and the selfie model's mask
+    /// ([`Detections::person_mask`]).
+    pub fn mask(&mut self, source: &SourceImage) -> Result<Detections, OnnxError> {
+        let (pose, others) = self.people(source, true)?;
+        let mut found = Detections::pose_only(pose);
+        found.segmentation = Some(self.selfie.segment(source)?);
+        found.others = others;
+        Ok(found)
     }
 
     /// With EHM-Tracker's models loaded, the box of the person they find on `source`

@@ -59,6 +59,9 @@ pub struct PoseKeypoints {
     pub keypoints: Vec<Keypoint>,
     /// Person probability per pixel of the 256² input, row-major.
     pub mask: Vec<f32>,
+    /// How many people the pose detector found on the photo (0 where it did not run); with
+    /// more than one these are the points of the one nearest its centre.
+    pub people: usize,
 }
 
 impl PoseKeypoints {
@@ -151,6 +154,7 @@ impl PoseLandmarker {
             roi,
             keypoints: Vec::new(),
             mask: mask.iter().map(|&x| sigmoid(x)).collect(),
+            people: 0,
         };
         found.keypoints = COCO_FROM_MEDIAPIPE
             .iter()

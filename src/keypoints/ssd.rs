@@ -169,14 +169,35 @@ impl SsdModel {
         min_score: f32,
         max: usize,
     ) -> Result<Vec<Detection>, OnnxError> {
+        self.detect_tiers(source, &[min_score], max)
+    }
+
+    /// [`Self::detect`] at each of `scores` in turn (highest first): a lower tier adds only the
+    /// detections that overlap none found already. Each tier averages its clusters over its own
+    /// anchors, so weak anchors around a confident detection do not move it (the cameraman's
+    /// pose crop shifted onto his shoulder when they were averaged in).
+    pub fn detect_tiers(
+        &mut self,
+        source: &SourceImage,
+        scores: &[f32],
+        max: usize,
+    ) -> Result<Vec<Detection>, OnnxError> {
         let side = source.size as f32;
         let mut input = Roi::whole(side).sample(source, self.ssd.layout.input);
         if self.signed_input {
             input.iter_mut().for_each(|v| *v = 2.0 * *v - 1.0);
         }
-        let (boxes, scores) = self.run(&input)?;
-        Ok(self
-            .decode(&boxes, &scores, min_score, max)
+        let (boxes, logits) = self.run(&input)?;
+        let mut found: Vec<Detection> = Vec::new();
+        for &min_score in scores {
+            for d in self.decode(&boxes, &logits, min_score, max) {
+                let new = found.iter().all(|f| iou(f.bounds, d.bounds) <= NMS_OVERLAP);
+                if new && found.len() < max {
+                    found.push(d);
+                }
+            }
+        }
+        Ok(found
             .into_iter()
             .map(|d| Detection {
                 score: d.score,

@@ -226,6 +226,61 @@ where
     lerp(top, bottom, fy)
 }
 
+/// Clears the pixels of `mask` (`size`²) nearer a pixel of `others` than one of `person`: where
+/// two people touch, one mask of both split between them by their own coarser ones. Nothing is
+/// cleared when `person` is empty. Returns how many pixels were cleared.
+pub fn keep_nearer(mask: &mut [f32], size: usize, person: &[bool], others: &[bool]) -> usize {
+    if !person.contains(&true) {
+        return 0;
+    }
+    let (mine, theirs) = (
+        distance::nearest_seeds(person, size),
+        distance::nearest_seeds(others, size),
+    );
+    let mut cleared = 0;
+    for ((m, mine), theirs) in mask.iter_mut().zip(mine).zip(theirs) {
+        let distance = |d: Option<(f32, u32)>| d.map_or(f32::INFINITY, |(d2, _)| d2);
+        if *m > 0.0 && distance(theirs) < distance(mine) {
+            *m = 0.0;
+            cleared += 1;
+        }
+    }
+    cleared
+}
+
+/// Clears the parts of `mask` (`size`², values ≥ ½ being the person) that no pixel of `person`
+/// falls in, with a 3-pixel margin of their soft edge, unless none does (then all stay):
+/// another person beside the one reconstructed. Returns how many pixels were cleared.
+pub fn keep_parts_touching(mask: &mut [f32], size: usize, person: &[bool]) -> usize {
+    let inside: Vec<bool> = mask.iter().map(|&m| m >= 0.5).collect();
+    let (label, sizes) = distance::connected_parts(&inside, size);
+    let mut keep = vec![false; sizes.len()];
+    for (&l, &p) in label.iter().zip(person) {
+        if l != u32::MAX && p {
+            keep[l as usize] = true;
+        }
+    }
+    if !keep.contains(&true) {
+        return 0;
+    }
+    const MARGIN: usize = 3;
+    let dropped: Vec<bool> = label
+        .iter()
+        .map(|&l| l != u32::MAX && !keep[l as usize])
+        .collect();
+    let near = distance::nearest_seeds(&dropped, size);
+    let mut cleared = 0;
+    for (i, m) in mask.iter_mut().enumerate() {
+        let close =
+            near[i].is_some_and(|(d2, _)| d2 <= (MARGIN * MARGIN) as f32 && label[i] == u32::MAX);
+        if dropped[i] || (close && *m > 0.0) {
+            *m = 0.0;
+            cleared += 1;
+        }
+    }
+    cleared
+}
+
 /// A part of a person mask apart from its largest part is kept when it is at least this share of
 /// the largest (a hand or an arm seen apart from the body); smaller parts are stray pixels of the
 /// background the segmentation took for the person.

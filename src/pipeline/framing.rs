@@ -12,7 +12,7 @@ use glam::Vec2;
 use image::RgbaImage;
 
 use crate::fit::MIN_PRESENCE;
-use crate::keypoints::{Detections, Landmarkers, PoseKeypoints};
+use crate::keypoints::{Detections, Landmarkers};
 use crate::photo::{Crop, PhotoError, SOURCE_SIZE, SourceImage};
 use crate::progress::{Stage, check};
 use crate::reconstruct::ReconstructError;
@@ -164,8 +164,8 @@ pub struct SourcePhoto {
 
 impl SourcePhoto {
     /// Reads `photo`'s `square`. A tracked square is read as it is, and the pose model alone
-    /// runs when `models` are given and the photo has no alpha (for the person mask) or the
-    /// square asks for its points. A fitted one is framed around the person
+    /// runs when `models` are given and the photo has no alpha (with the selfie model, for
+    /// the person mask) or the square asks for its points. A fitted one is framed around the person
     /// `models` find ([`frame`]), and every keypoint model runs on the chosen square.
     /// `progress` hears [`Stage::Keypoints`] before each model run.
     pub fn read(
@@ -195,8 +195,7 @@ impl SourcePhoto {
                 let detections = match models.filter(|_| points || !has_alpha) {
                     Some(models) => {
                         started(progress)?;
-                        let pose = models.pose(&image).map_err(keypoint_error)?;
-                        Some(Detections::pose_only(pose))
+                        Some(models.mask(&image).map_err(keypoint_error)?)
                     }
                     None => None,
                 };
@@ -225,7 +224,7 @@ impl SourcePhoto {
     /// Frames the person and detects every keypoint on the chosen square. The alpha frames a
     /// photo that has one before any model runs. Else the person is found on the whole photo
     /// (padded square): EHM-Tracker's YOLOX box when its models are loaded (as its tracker
-    /// crops), else the pose model's mask. On a square photo that look is the full detection on
+    /// crops), else the person mask (the selfie and pose models). On a square photo that look is the full detection on
     /// its centred square, run again only on a reframed square; on another the person is looked
     /// for first, and every model runs on the square they are framed in.
     /// `read` makes the source image of a square of `pixels`.
@@ -238,9 +237,9 @@ impl SourcePhoto {
         progress: &mut dyn FnMut(Stage) -> bool,
     ) -> Result<(Option<Crop>, SourceImage, Detections), ReconstructError> {
         let (width, height) = pixels.dimensions();
-        let crop = if has_alpha {
+        let (crop, people) = if has_alpha {
             let person = Person::from_mask(&PersonMask::alpha(pixels), width, height);
-            frame(person, width, height, framing)
+            (frame(person, width, height, framing), 0)
         } else {
             let whole = Crop::padded(width, height);
             let image = read(Some(whole))?;
@@ -252,32 +251,47 @@ impl SourcePhoto {
                 );
                 Person::from_box([low.x, low.y, high.x, high.y], width, height)
             };
-            let masked = |pose: &PoseKeypoints| {
-                let mask = PersonMask::over(whole, pose.mask_at(SOURCE_SIZE as usize));
-                (pose.presence >= MIN_PRESENCE)
-                    .then(|| Person::from_mask(&mask, width, height))
-                    .flatten()
+            // The person mask and the pose model's together: on a person small in a large
+            // photo the selfie model (reading the whole photo at 256²) misses the top of the
+            // head, and a square framed on its mask alone cut it off. Where the pose model
+            // sees nobody (a face close up), its mask is a guess and the selfie model's alone
+            // frames them.
+            let masked = |found: &Detections| {
+                let side = SOURCE_SIZE as usize;
+                let person = found.person_mask(side);
+                let values = match found.pose.presence >= MIN_PRESENCE {
+                    true => (person.iter().zip(found.pose.mask_at(side)))
+                        .map(|(a, b)| a.max(b))
+                        .collect(),
+                    false if found.segmentation.is_some() => person,
+                    false => return None,
+                };
+                Person::from_mask(&PersonMask::over(whole, values), width, height)
             };
-            let (person, found) = if width == height {
+            let (person, looked) = if width == height {
                 let found = detect(models, &image, progress)?;
-                let person = found.person.map_or_else(|| masked(&found.pose), on_photo);
-                (person, Some(found))
+                let person = found.person.map_or_else(|| masked(&found), on_photo);
+                (person, found)
             } else {
                 started(progress)?;
+                let found = models.mask(&image).map_err(keypoint_error)?;
                 let person = match models.person_box(&image).map_err(keypoint_error)? {
                     Some(boxed) => on_photo(boxed),
-                    None => masked(&models.pose(&image).map_err(keypoint_error)?),
+                    None => masked(&found),
                 };
-                (person, None)
+                (person, found)
             };
-            match (frame(person, width, height, framing), found) {
+            match frame(person, width, height, framing) {
                 // The whole square photo is its centred square.
-                (None, Some(found)) => return Ok((None, image, found)),
-                (crop, _) => crop,
+                None if width == height => return Ok((None, image, looked)),
+                crop => (crop, looked.pose.people),
             }
         };
         let image = read(crop)?;
-        let found = detect(models, &image, progress)?;
+        let mut found = detect(models, &image, progress)?;
+        // The square framed around the person may leave the others out; the count is the
+        // whole photo's.
+        found.pose.people = found.pose.people.max(people);
         Ok((crop, image, found))
     }
 }

@@ -5,7 +5,7 @@
 //! Stages, each timed and cancellable ([`crate::progress`]): read the photo → load the keypoint
 //! models when the photo needs them (kept for the next photo) → keypoints and framing → the
 //! source view (a tracking file's frame 0, a fit to the keypoints, or given) → the person mask
-//! (the photo's alpha, else the pose model's segmentation, else — default mode only — the
+//! (the photo's alpha, else the selfie and pose models' person segmentation, else — default mode only — the
 //! body's silhouette) → the reconstruction proper ([`crate::reconstruct`] on a body template,
 //! [`crate::guava_mode`] with GUAVA's networks on EHM).
 
@@ -137,11 +137,11 @@ pub struct Source {
     pub report: Report,
 }
 
-/// `image` masked by its alpha, else by the pose model's person segmentation in `detections`:
-/// what an avatar is made from and compared with.
+/// `image` masked by its alpha, else by the person mask of `detections`
+/// ([`Detections::person_mask`]): what an avatar is made from and compared with.
 fn with_person_mask(mut image: SourceImage, detections: Option<&Detections>) -> SourceImage {
     if let (None, Some(d)) = (&image.mask, detections) {
-        image.apply_mask(person_mask(&d.pose, image.size));
+        image.apply_mask(d.person_mask(image.size as usize));
     }
     image
 }
@@ -295,7 +295,7 @@ impl Pipeline {
                 // own offsets from EHM-Tracker's fits, which use no silhouette).
                 let mask = match (&read.image.mask, &read.detections) {
                     (Some(alpha), _) => Some(alpha.clone()),
-                    (None, Some(d)) => Some(person_mask(&d.pose, read.image.size)),
+                    (None, Some(d)) => Some(d.person_mask(read.image.size as usize)),
                     (None, None) => None,
                 };
                 if let (FitBody::Template(b), Some(mask)) = (body, mask) {
@@ -322,6 +322,14 @@ impl Pipeline {
             .as_ref()
             .map(|d| d.pose.keypoints.clone())
             .unwrap_or_default();
+        if let Some(people) = read.detections.as_ref().map(|d| d.pose.people)
+            && people > 1
+        {
+            report.notes.push(format!(
+                "{people} people on the photo: the avatar is of the one nearest its centre \
+                 (crop the photo to choose another)"
+            ));
+        }
         report.timings = clock.finish();
         Ok(Source {
             photo: read,
@@ -353,7 +361,7 @@ impl Pipeline {
             ehm_identity,
             mut report,
         } = source;
-        let segmentation = read.detections.as_ref().map(|d| &d.pose);
+        let segmentation = read.detections.as_ref();
         let photo = with_person_mask(read.image, read.detections.as_ref());
         let (avatar, core) = match mode {
             Mode::Default(body) => {
@@ -379,13 +387,13 @@ impl Pipeline {
                     side,
                 )?;
                 if image.mask.is_none() {
-                    let pose = segmentation.ok_or_else(|| PhotoError {
+                    let found = segmentation.ok_or_else(|| PhotoError {
                         file: file.clone(),
                         problem: "has no alpha channel, and its person mask needs the pose \
                                   model, which did not load"
                             .into(),
                     })?;
-                    image.apply_mask(person_mask(pose, image.size));
+                    image.apply_mask(found.person_mask(image.size as usize));
                 }
                 match ehm_identity.filter(|identity| *identity != body.identity) {
                     Some(identity) => {
@@ -446,7 +454,7 @@ impl Pipeline {
     }
 
     /// `photo` as `view` sees it, at [`SOURCE_SIZE`]: its square, masked by its alpha or else by
-    /// the pose model's person segmentation (what an avatar made from it is compared with).
+    /// the keypoint models' person mask (what an avatar made from it is compared with).
     pub fn masked_photo(
         &mut self,
         photo: Photo,
@@ -477,14 +485,6 @@ impl Pipeline {
     pub fn landmarkers(&mut self) -> Result<&mut Landmarkers, String> {
         self.keypoints.load()
     }
-}
-
-/// The pose model's person segmentation at `size`², without the stray parts it takes for the
-/// person ([`crate::photo::keep_person`]).
-fn person_mask(pose: &crate::keypoints::PoseKeypoints, size: u32) -> Vec<f32> {
-    let mut mask = pose.mask_at(size as usize);
-    crate::photo::keep_person(&mut mask, size as usize);
-    mask
 }
 
 /// A failed fit of the photo `file`.

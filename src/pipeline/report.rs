@@ -15,7 +15,7 @@ pub enum MaskSource {
     /// The photo's alpha channel.
     #[default]
     Alpha,
-    /// The pose model's person segmentation.
+    /// The selfie model's person segmentation, cut to the pose model's person.
     Segmentation,
     /// The tracked body's silhouette (no alpha and no pose model; default mode).
     Silhouette,
@@ -25,7 +25,7 @@ impl MaskSource {
     pub fn describe(self) -> &'static str {
         match self {
             MaskSource::Alpha => "the alpha channel",
-            MaskSource::Segmentation => "the pose model's person segmentation",
+            MaskSource::Segmentation => "the person segmentation (selfie and pose models)",
             MaskSource::Silhouette => "the tracked body's silhouette",
         }
     }
@@ -51,6 +51,7 @@ pub struct Report {
     pub observed: usize,
     /// Default mode: texels filled from their mirror image.
     pub mirrored: usize,
+    pub behind: usize,
     /// GUAVA mode: UV Gaussians dropped at opacity ≤ 0.001.
     pub pruned: usize,
     /// Default mode: Gaussians made for the person's pixels the body does not cover.
@@ -70,6 +71,7 @@ impl Report {
         self.texels = core.texels;
         self.observed = core.observed;
         self.mirrored = core.mirrored;
+        self.behind = core.behind;
         self.pruned = core.pruned;
         self.extras = core.extras;
         self.left_out = core.left_out;
@@ -107,9 +109,9 @@ impl Report {
                 self.observed, self.texels, self.pruned
             ),
             None => format!(
-                "{} of {} texels seen, {} mirrored, rest inpainted; {} Gaussians beyond the body; \
-                 {} on parts the photo did not show left out",
-                self.observed, self.texels, self.mirrored, self.extras, self.left_out
+                "{} of {} texels seen, {} mirrored, {} on the back from the front, rest inpainted; \
+                 {} Gaussians beyond the body; {} on parts the photo did not show left out",
+                self.observed, self.texels, self.mirrored, self.behind, self.extras, self.left_out
             ),
         });
         parts.extend(self.notes.iter().cloned());
@@ -161,10 +163,15 @@ impl Report {
                 self.texels, self.observed, self.pruned
             ),
             None => format!(
-                "texels: {} valid, {} seen by the camera, {} filled by symmetry, the rest inpainted; \
-                 {} Gaussians for the person's pixels beyond the body; {} on parts the photo did \
-                 not show left out",
-                self.texels, self.observed, self.mirrored, self.extras, self.left_out
+                "texels: {} valid, {} seen by the camera, {} filled by symmetry, {} on the back from \
+                 the front, the rest inpainted; {} Gaussians for the person's pixels beyond the \
+                 body; {} on parts the photo did not show left out",
+                self.texels,
+                self.observed,
+                self.mirrored,
+                self.behind,
+                self.extras,
+                self.left_out
             ),
         });
         lines.push(format!("mask from {}", self.mask.describe()));

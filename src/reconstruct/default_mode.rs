@@ -162,6 +162,7 @@ pub fn build(
         displacements: Vec::new(),
         template,
         uv: out,
+        skinned: Default::default(),
         outside: 0,
     }
 }

@@ -1,43 +1,75 @@
 //! Gaussians for what the body does not explain (hair beyond the scalp, loose clothing, a held
 //! object): one for every person-mask pixel of the source view the (dressed) body does not cover,
-//! with that pixel's colour, at the depth of the nearest body surface the view does see, bound to
-//! that surface's triangle so it follows the animation.
+//! with that pixel's colour, at the depth of the nearest body surface the view does see.
+//!
+//! Each is skinned by the body around it ([`SkinnedGaussians`]), never bound rigidly to one
+//! triangle: up to four body vertices near it, weighted by distance, so it moves as the surface
+//! around it does, as clothed-avatar methods diffuse skinning weights off the body. Which
+//! vertices: cloth between an arm and the torso below the shoulder (a jacket's sides beside a
+//! hanging arm) takes the torso's alone, so it stays with the torso when the arm swings instead
+//! of flapping with it like a wing (the demo portrait's suit did); elsewhere the nearest, arm or
+//! not (a sleeve follows its arm, hair its head).
 //!
 //! Each is a disc facing the source camera, one pixel wide, and as thick along the view as half
-//! its distance from that surface (hair 6 cm above the scalp stands 3 cm deep, up to
-//! [`MAX_DEPTH`]), so that from the side what was a sheet keeps some volume.
+//! its distance from that surface, up to [`MAX_DEPTH`] (thicker, a jacket's edge around the neck
+//! stood out as a collar from the side). Hair (what the head skins) is placed at the head's
+//! middle depth instead and stands only [`HAIR_DEPTH`] deep along the view: at the nearest
+//! surface's depth, the hair above and beside the face was a flat brim in front of the forehead
+//! seen from the side, and deeper discs drew horizontal streaks; from the front it looks the same
+//! either way.
 
 use glam::{Mat3A, Vec3};
 
-use crate::avatar::{UvGaussians, quat_from_matrix, quat_mul};
-use crate::body::TriangleFrame;
+use crate::avatar::{SkinnedGaussians, blend, quat_from_matrix, quat_mul};
+use crate::body::{BodyModel, PosedBody};
 use crate::camera::Camera;
 use crate::photo::SourceImage;
 use crate::photo::distance::nearest_seeds;
 use crate::raster::Fragments;
 
 /// The thickest an extra Gaussian stands along the view (standard deviation, metres).
-pub const MAX_DEPTH: f32 = 0.03;
+pub const MAX_DEPTH: f32 = 0.01;
+/// How deep hair stands along the view (standard deviation, metres): three of it reach from the
+/// head's middle to its front and back.
+pub const HAIR_DEPTH: f32 = 0.002;
 /// Standard deviation of a disc across the view, in pixels of the source.
 const RADIUS_PX: f32 = 0.6;
 /// Extra Gaussians are opaque where the mask is sure, as the body's discs are.
 const OPACITY: f32 = 0.95;
 /// A pixel belongs to the person at this mask value.
 const PERSON: f32 = 0.5;
+/// Body vertices a Gaussian is skinned by, at most, and how far they may be (metres); past it
+/// the nearest few are taken from further out.
+const ANCHORS: usize = 4;
+const REACH: f32 = 0.06;
+/// The distance falloff of the anchors' weights (metres): those within a few centimetres share
+/// the Gaussian about evenly, so it moves with the surface around it, not one vertex.
+const FALLOFF: f32 = 0.03;
+/// Cloth this far below the shoulder joint and between the arm and the torso follows the torso.
+const BELOW_SHOULDER: f32 = 0.05;
+
+/// The arms' root joints: a vertex skinned mostly to one of these or their descendants (hands
+/// and fingers) is an arm's.
+const ARM_ROOTS: [&str; 2] = ["upperarm01.L", "upperarm01.R"];
+/// Each arm's joints down its length: shoulder, elbow, wrist.
+const ARM_CHAINS: [[&str; 3]; 2] = [
+    ["upperarm01.L", "lowerarm01.L", "wrist.L"],
+    ["upperarm01.R", "lowerarm01.R", "wrist.R"],
+];
 
 /// Extra Gaussians for `photo`'s person pixels that `fragments` (the posed body's
-/// rasterization from `camera`, the photo's size) leaves uncovered; `frames` are the posed
-/// triangles' frames and `vertices`/`triangles` the posed mesh. Features: RGB and the mask value
-/// as source confidence.
+/// rasterization from `camera`, the photo's size) leaves uncovered; `vertices` are the posed
+/// body's (dressed, as rasterized) and `posed` its pose (for the skinning). Features: RGB and
+/// the mask value as source confidence.
 pub fn extras(
     photo: &SourceImage,
     fragments: &Fragments,
+    body: &BodyModel,
     vertices: &[Vec3],
-    triangles: &[[u32; 3]],
-    frames: &[TriangleFrame],
+    posed: &PosedBody,
     camera: &Camera,
-) -> UvGaussians {
-    let mut out = UvGaussians::default();
+) -> SkinnedGaussians {
+    let mut out = SkinnedGaussians::default();
     let Some(mask) = &photo.mask else {
         return out;
     };
@@ -50,49 +82,396 @@ pub fn extras(
     let disc = quat_from_matrix(
         world_from_view * Mat3A::from_cols(Vec3::X.into(), Vec3::Z.into(), (-Vec3::Y).into()),
     );
+    let anchors = Anchors::new(body, vertices, posed);
     for (i, &m) in mask.iter().enumerate() {
         if m < PERSON || covered[i] {
             continue;
         }
         let Some((_, q)) = nearest[i] else { continue };
         let q = q as usize;
-        let f = fragments.triangle[q] as usize;
-        let frame = frames[f];
-        if frame.scale.is_nan() || frame.scale <= 0.0 {
-            continue;
-        }
         let z = fragments.depth[q];
         let (x, y) = ((i % size) as f32 + 0.5, (i / size) as f32 + 0.5);
         let point = camera.unproject(x, y, z);
-        let b = fragments.bary[q];
-        let [v0, v1, v2] = triangles[f].map(|k| vertices[k as usize]);
-        let anchor = b[0] * v0 + b[1] * v1 + b[2] * v2;
         let gap = camera.unproject((q % size) as f32 + 0.5, (q / size) as f32 + 0.5, z);
+        let beside = body.triangles[fragments.triangle[q] as usize];
+        let Some((v, w)) = anchors.of(point, &beside) else {
+            continue;
+        };
+        let hair = v.iter().any(|&k| anchors.head[k as usize]);
+        let middle = camera
+            .view_from_world
+            .transform_point3(anchors.head_middle)
+            .z;
+        let (point, (v, w), along) = match hair {
+            true => {
+                let deeper = camera.unproject(x, y, middle.max(z));
+                match anchors.of(deeper, &beside) {
+                    Some(skinning) => (deeper, skinning, HAIR_DEPTH),
+                    None => continue,
+                }
+            }
+            false => (point, (v, w), 0.5 * point.distance(gap)),
+        };
         let across = RADIUS_PX * camera.pixel_footprint(z);
-        let along = (0.5 * point.distance(gap)).clamp(across, MAX_DEPTH);
-        let to_local = frame.rotation.transpose();
-        let triangle_rotation = quat_from_matrix(Mat3A::from(frame.rotation));
-        let inverse = [
-            triangle_rotation[0],
-            -triangle_rotation[1],
-            -triangle_rotation[2],
-            -triangle_rotation[3],
-        ];
-        out.triangles.push(f as u32);
-        out.barycentrics.push(b);
-        out.offsets
-            .push((to_local * (point - anchor) / frame.scale).to_array());
-        out.local.rotations.push(quat_mul(inverse, disc));
-        out.local
-            .scales
-            .push([across, along, across].map(|s| s / frame.scale));
-        out.local.opacities.push(OPACITY * m.min(1.0));
+        let along = along.clamp(across, MAX_DEPTH);
         let (rgb, _) = photo.pixel(i);
-        out.local.features.extend(
-            rgb.map(|c| (c / m).min(1.0))
-                .into_iter()
-                .chain([m.min(1.0)]),
-        );
+        let features = rgb.map(|c| (c / m).min(1.0));
+        let gaussian = Extra {
+            scale: [across, along, across],
+            opacity: OPACITY * m.min(1.0),
+            features: [features[0], features[1], features[2], m.min(1.0)],
+        };
+        push(&mut out, point, (v, w), disc, &gaussian, vertices, posed);
     }
     out
+}
+
+/// What an extra Gaussian is besides where: its scale (metres), opacity and features.
+struct Extra {
+    scale: [f32; 3],
+    opacity: f32,
+    features: [f32; 4],
+}
+
+/// Appends `extra` at `point` with `rotation` in the world, skinned by `(v, w)`; nothing where
+/// their blended skinning is degenerate.
+fn push(
+    out: &mut SkinnedGaussians,
+    point: Vec3,
+    (v, w): ([u32; 4], [f32; 4]),
+    rotation: [f32; 4],
+    extra: &Extra,
+    vertices: &[Vec3],
+    posed: &PosedBody,
+) {
+    let (anchor, skin) = blend(&v, &w, vertices, posed);
+    let det = skin.determinant();
+    if !(det.is_finite() && det.abs() > 1e-6) {
+        return;
+    }
+    let turn = quat_from_matrix(skin);
+    let inverse = [turn[0], -turn[1], -turn[2], -turn[3]];
+    out.vertices.push(v);
+    out.weights.push(w);
+    out.offsets
+        .push((skin.inverse() * (point - anchor)).to_array());
+    out.local.rotations.push(quat_mul(inverse, rotation));
+    out.local.scales.push(extra.scale);
+    out.local.opacities.push(extra.opacity);
+    out.local.features.extend(extra.features);
+}
+
+/// Which body vertices skin a point beyond the body: the posed vertices in a grid, which of
+/// them are an arm's, and where the shoulders and the torso are.
+struct Anchors<'a> {
+    vertices: &'a [Vec3],
+    grid: Grid,
+    arm: Vec<bool>,
+    /// Which vertices are the head's, and their middle (posed).
+    head: Vec<bool>,
+    head_middle: Vec3,
+    /// The torso's frame (its spine joint, posed) and each arm's shoulder, elbow and wrist in it.
+    torso_from_world: glam::Affine3A,
+    arms: Vec<[Vec3; 3]>,
+}
+
+/// The grid's cell (metres): a query within [`REACH`] looks at 27 cells.
+const CELL: f32 = REACH;
+/// One vertex in this many may anchor (about one every 2 cm on the default body): skinning
+/// weights vary smoothly over a few centimetres, and the full mesh made the search ten times
+/// slower than the rest of the stage.
+const ANCHOR_STRIDE: usize = 4;
+
+/// Vertices by the cell of a dense grid over their bounding box (the cells' vertices one after
+/// another, as compressed sparse rows): a hashed grid's lookups took most of a second per
+/// photo.
+struct Grid {
+    origin: Vec3,
+    dims: [i32; 3],
+    starts: Vec<u32>,
+    members: Vec<u32>,
+}
+
+impl Grid {
+    fn new(vertices: &[Vec3]) -> Self {
+        let (lo, hi) = vertices
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), v| {
+                (lo.min(*v), hi.max(*v))
+            });
+        let (lo, hi) = if lo.x <= hi.x {
+            (lo, hi)
+        } else {
+            (Vec3::ZERO, Vec3::ZERO)
+        };
+        let dims = (((hi - lo) / CELL).floor().as_ivec3() + 1).to_array();
+        let mut grid = Self {
+            origin: lo,
+            dims,
+            starts: vec![0; (dims[0] * dims[1] * dims[2]) as usize + 1],
+            members: Vec::new(),
+        };
+        let cells: Vec<Option<usize>> = vertices
+            .iter()
+            .enumerate()
+            .map(|(k, v)| match k % ANCHOR_STRIDE {
+                0 => grid.index(grid.cell(*v)),
+                _ => None,
+            })
+            .collect();
+        for c in cells.iter().flatten() {
+            grid.starts[c + 1] += 1;
+        }
+        for k in 1..grid.starts.len() {
+            grid.starts[k] += grid.starts[k - 1];
+        }
+        let mut next = grid.starts.clone();
+        grid.members = vec![0; grid.starts[grid.starts.len() - 1] as usize];
+        for (k, c) in cells.iter().enumerate() {
+            if let Some(c) = c {
+                grid.members[next[*c] as usize] = k as u32;
+                next[*c] += 1;
+            }
+        }
+        grid
+    }
+
+    fn cell(&self, v: Vec3) -> [i32; 3] {
+        ((v - self.origin) / CELL).floor().as_ivec3().to_array()
+    }
+
+    fn index(&self, c: [i32; 3]) -> Option<usize> {
+        let inside = (0..3).all(|a| (0..self.dims[a]).contains(&c[a]));
+        inside.then(|| ((c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]) as usize)
+    }
+
+    fn cell_members(&self, c: [i32; 3]) -> &[u32] {
+        match self.index(c) {
+            Some(i) => &self.members[self.starts[i] as usize..self.starts[i + 1] as usize],
+            None => &[],
+        }
+    }
+}
+
+impl<'a> Anchors<'a> {
+    fn new(body: &BodyModel, vertices: &'a [Vec3], posed: &PosedBody) -> Self {
+        let grid = Grid::new(vertices);
+        // Joints in an arm: the roots and everything below them.
+        let in_arm: Vec<bool> = (0..body.joints.len())
+            .map(|mut j| {
+                loop {
+                    if ARM_ROOTS.contains(&body.joints[j].name.as_str()) {
+                        break true;
+                    }
+                    match body.joints[j].parent {
+                        Some(p) if p != j => j = p,
+                        _ => break false,
+                    }
+                }
+            })
+            .collect();
+        let arm = body
+            .skin_joints
+            .iter()
+            .zip(&body.skin_weights)
+            .map(|(joints, weights)| {
+                let arm_share: f32 = joints
+                    .iter()
+                    .zip(weights)
+                    .filter(|(j, _)| in_arm.get(**j as usize).copied().unwrap_or(false))
+                    .map(|(_, w)| w)
+                    .sum();
+                arm_share > 0.5
+            })
+            .collect();
+        let spine = ["spine01", "spine02", "spine03", "root"]
+            .iter()
+            .find_map(|n| body.joint_index(n))
+            .unwrap_or(0);
+        let torso_from_world = posed
+            .joints
+            .get(spine)
+            .map_or(glam::Affine3A::IDENTITY, |j| j.inverse());
+        let arms = ARM_CHAINS
+            .iter()
+            .filter_map(|chain| {
+                let at = |n: &str| {
+                    let j = posed.joints.get(body.joint_index(n)?)?;
+                    Some(torso_from_world.transform_point3(j.translation.into()))
+                };
+                Some([at(chain[0])?, at(chain[1])?, at(chain[2])?])
+            })
+            .collect();
+        let head: Vec<bool> = (0..vertices.len())
+            .map(|k| body.part_of(k) == Some("head"))
+            .collect();
+        let (sum, count) = vertices
+            .iter()
+            .zip(&head)
+            .filter(|(_, h)| **h)
+            .fold((Vec3::ZERO, 0usize), |(s, n), (v, _)| (s + *v, n + 1));
+        Self {
+            vertices,
+            grid,
+            arm,
+            head,
+            head_middle: sum / count.max(1) as f32,
+            torso_from_world,
+            arms,
+        }
+    }
+
+    /// Up to [`ANCHORS`] vertices near `point` and their weights (summing to 1): within
+    /// [`REACH`], else three times as far, else `beside` (the corners of the body surface seen
+    /// nearest the point's pixel: a held object, such as the demo portrait's helmet 40 cm from
+    /// her arm, rides the surface it is seen beside).
+    fn of(&self, point: Vec3, beside: &[u32]) -> Option<([u32; 4], [f32; 4])> {
+        let mut near = self.within(point, REACH);
+        if near.is_empty() {
+            near = self.within(point, 3.0 * REACH);
+        }
+        if near.is_empty() {
+            near = beside
+                .iter()
+                .map(|&k| (self.vertices[k as usize].distance(point), k))
+                .collect();
+        }
+        if near.is_empty() {
+            return None;
+        }
+        if self.under_arm(point, &near) {
+            let torso: Vec<(f32, u32)> = near
+                .iter()
+                .copied()
+                .filter(|&(_, k)| !self.arm[k as usize])
+                .collect();
+            if !torso.is_empty() {
+                near = torso;
+            }
+        }
+        near.sort_by(|a, b| a.0.total_cmp(&b.0));
+        near.truncate(ANCHORS);
+        let weight = |d: f32| (-0.5 * (d / FALLOFF).powi(2)).exp().max(1e-6);
+        let total: f32 = near.iter().map(|&(d, _)| weight(d)).sum();
+        let (mut v, mut w) = ([near[0].1; 4], [0.0; 4]);
+        for (slot, &(d, k)) in near.iter().enumerate() {
+            v[slot] = k;
+            w[slot] = weight(d) / total;
+        }
+        Some((v, w))
+    }
+
+    /// The vertices within `radius` of `point`, with their distances.
+    fn within(&self, point: Vec3, radius: f32) -> Vec<(f32, u32)> {
+        let reach = (radius / CELL).ceil() as i32;
+        let c = self.grid.cell(point);
+        let mut out = Vec::new();
+        for dx in -reach..=reach {
+            for dy in -reach..=reach {
+                for dz in -reach..=reach {
+                    let list = self.grid.cell_members([c[0] + dx, c[1] + dy, c[2] + dz]);
+                    for &k in list {
+                        let d = self.vertices[k as usize].distance(point);
+                        if d <= radius {
+                            out.push((d, k));
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Whether `point` lies between an arm and the torso below the shoulder: nearest to an arm's
+    /// vertex, below that arm's shoulder, and closer to the torso's midline (across, in the
+    /// torso's frame) than the arm's bones at its height.
+    fn under_arm(&self, point: Vec3, near: &[(f32, u32)]) -> bool {
+        let Some(&(_, k)) = near.iter().min_by(|a, b| a.0.total_cmp(&b.0)) else {
+            return false;
+        };
+        if !self.arm[k as usize] {
+            return false;
+        }
+        let p = self.torso_from_world.transform_point3(point);
+        let vertex = self
+            .torso_from_world
+            .transform_point3(self.vertices[k as usize]);
+        let near_arm = |a: &&[Vec3; 3]| {
+            a.iter()
+                .map(|j| j.distance(vertex))
+                .fold(f32::MAX, f32::min)
+        };
+        let Some([shoulder, elbow, wrist]) = self
+            .arms
+            .iter()
+            .min_by(|a, b| near_arm(a).total_cmp(&near_arm(b)))
+        else {
+            return false;
+        };
+        if p.y >= shoulder.y - BELOW_SHOULDER {
+            return false;
+        }
+        // The bones' x at the point's height: along the upper arm, then the forearm.
+        let across = |a: Vec3, b: Vec3| {
+            let t = ((p.y - a.y) / (b.y - a.y)).clamp(0.0, 1.0);
+            (b.y != a.y).then_some(a.x + t * (b.x - a.x))
+        };
+        let bone_x = if p.y >= elbow.y {
+            across(*shoulder, *elbow)
+        } else {
+            across(*elbow, *wrist)
+        };
+        bone_x.is_some_and(|x| p.x.abs() < x.abs())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::body::BodyPose;
+
+    /// On the default body with its left arm lowered along its side (as a photo's hanging arm):
+    /// cloth between the arm and the torso below the shoulder is skinned by the torso alone;
+    /// cloth outside the arm by the arm; hair above the head by the head; and every weight set
+    /// sums to 1.
+    #[test]
+    fn cloth_under_the_arm_follows_the_torso_and_a_sleeve_its_arm() {
+        let body = BodyModel::default_body().expect("body");
+        let mut pose = BodyPose::rest(&body);
+        // The A-pose's arm turned down 35° about the body's front axis, to hang near the side.
+        pose.set_rotation(&body, "upperarm01.L", Vec3::new(0.0, 0.0, -0.6))
+            .expect("joint");
+        let mut posed = PosedBody::default();
+        body.pose(&pose, &mut posed).expect("pose");
+        let anchors = Anchors::new(&body, &posed.vertices, &posed);
+        let joint = |n: &str| Vec3::from(posed.joints[body.joint_index(n).expect(n)].translation);
+        let (shoulder, elbow) = (joint("upperarm01.L"), joint("lowerarm01.L"));
+        let along = |t: f32| shoulder + t * (elbow - shoulder);
+        let arm_share = |p: Vec3| {
+            let (v, w) = anchors.of(p, &[]).expect("anchored");
+            assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-5, "{w:?}");
+            v.iter()
+                .zip(w)
+                .filter(|(k, _)| anchors.arm[**k as usize])
+                .map(|(_, w)| w)
+                .sum::<f32>()
+        };
+        // Between the upper arm (two thirds down) and the torso: 3 cm in from the arm's axis.
+        let inside = along(0.66) - Vec3::new(0.03, 0.0, 0.0);
+        let outside = along(0.66) + Vec3::new(0.06, 0.0, 0.0);
+        println!(
+            "arm share: inside {}, outside {}",
+            arm_share(inside),
+            arm_share(outside)
+        );
+        assert_eq!(arm_share(inside), 0.0, "under the arm: the torso's");
+        assert!(arm_share(outside) > 0.99, "outside the arm: the arm's");
+        let top = joint("head") + Vec3::new(0.0, 0.25, 0.0);
+        let (v, _) = anchors.of(top, &[]).expect("anchored");
+        assert!(
+            v.iter().all(|&k| anchors.head[k as usize]),
+            "hair: the head's"
+        );
+    }
 }

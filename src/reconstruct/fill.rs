@@ -1,6 +1,7 @@
 //! Filling the texels the source camera did not see (default mode): first from the mirrored
 //! texel where the body's left–right symmetry says where that is (a face turned away still shows
-//! its other cheek), then push–pull inpainting (a weighted image pyramid: coarser levels fill
+//! its other cheek), then, on the back, from what the front shows in front of it
+//! ([`super::behind`]), then push–pull inpainting (a weighted image pyramid: coarser levels fill
 //! the holes of finer ones, so colours spread smoothly from what was seen).
 
 use glam::Vec3;
@@ -14,11 +15,15 @@ use crate::photo::bilinear_clamped;
 pub enum FillSource {
     Observed,
     Mirrored,
+    /// The back, from the front in front of it.
+    Behind,
     Inpainted,
 }
 
 /// Mirrored colours count for less than observed ones in the pyramid.
 const MIRROR_WEIGHT: f32 = 0.5;
+/// The back's colours from the front count for less again: a guess about the person's back.
+const BEHIND_WEIGHT: f32 = 0.25;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct FilledTexture {
@@ -30,8 +35,9 @@ pub struct FilledTexture {
     pub confidence: Vec<f32>,
 }
 
-/// Fills `texture` over the valid texels of `uv`. Returns `None` if no texel was observed.
-pub fn fill(uv: &UvMap, texture: &UvTexture) -> Option<FilledTexture> {
+/// Fills `texture` over the valid texels of `uv`, with `behind`'s colours for the back where it
+/// has them. Returns `None` if no texel was observed.
+pub fn fill(uv: &UvMap, texture: &UvTexture, behind: &[Option<[f32; 3]>]) -> Option<FilledTexture> {
     let n = (uv.size * uv.size) as usize;
     let mut rgb = texture.rgb.clone();
     let mut weight = texture.confidence.clone();
@@ -47,6 +53,10 @@ pub fn fill(uv: &UvMap, texture: &UvTexture) -> Option<FilledTexture> {
             rgb[i] = texture.rgb[m as usize];
             weight[i] = MIRROR_WEIGHT * texture.confidence[m as usize];
             source[i] = FillSource::Mirrored;
+        } else if let Some(Some(colour)) = behind.get(i) {
+            rgb[i] = *colour;
+            weight[i] = BEHIND_WEIGHT;
+            source[i] = FillSource::Behind;
         }
     }
     if weight.iter().all(|&w| w <= 0.0) {

@@ -10,6 +10,7 @@
 //! This module holds the **default reconstruction** (no GUAVA weights); the learned decoders
 //! plug in after the same inverse texture mapping in [`crate::guava_mode`].
 
+pub mod behind;
 pub mod default_mode;
 pub mod displacement;
 pub mod extras;
@@ -21,7 +22,7 @@ use std::collections::BTreeMap;
 use std::time::Duration;
 
 use crate::avatar::Avatar;
-use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, TargetGroup, triangle_frames};
+use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, TargetGroup};
 use crate::photo::{PhotoError, SourceImage};
 use crate::progress::{Cancelled, Stage, StageClock};
 use crate::raster;
@@ -66,6 +67,8 @@ pub struct Report {
     pub observed: usize,
     /// Default mode: texels filled from their mirror image.
     pub mirrored: usize,
+    /// Texels of the back coloured from the front in front of them.
+    pub behind: usize,
     /// GUAVA mode: UV Gaussians dropped at opacity ≤ 0.001.
     pub pruned: usize,
     /// GUAVA mode: triangles that win at least one pixel of the source view.
@@ -140,12 +143,11 @@ pub fn reconstruct_default(
     report.observed = sampled.observed();
 
     clock.start(Stage::Fill, progress)?;
-    let filled = fill::fill(uv, &sampled).ok_or(ReconstructError::NothingVisible)?;
-    report.mirrored = filled
-        .source
-        .iter()
-        .filter(|&&s| s == fill::FillSource::Mirrored)
-        .count();
+    let behind = behind::behind(body, uv, &sampled);
+    let filled = fill::fill(uv, &sampled, &behind).ok_or(ReconstructError::NothingVisible)?;
+    let count = |of: fill::FillSource| filled.source.iter().filter(|&&s| s == of).count();
+    report.mirrored = count(fill::FillSource::Mirrored);
+    report.behind = count(fill::FillSource::Behind);
 
     clock.start(Stage::Gaussians, progress)?;
     let mut avatar = default_mode::build(
@@ -161,18 +163,8 @@ pub fn reconstruct_default(
     avatar.displacements = displacements;
 
     clock.start(Stage::Extras, progress)?;
-    let mut frames = Vec::new();
-    triangle_frames(&posed.vertices, &body.triangles, &mut frames);
-    let extra = extras::extras(
-        &photo,
-        &fragments,
-        &posed.vertices,
-        &body.triangles,
-        &frames,
-        camera,
-    );
-    report.extras = extra.local.len();
-    avatar.uv.append(extra);
+    avatar.skinned = extras::extras(&photo, &fragments, body, &posed.vertices, &posed, camera);
+    report.extras = avatar.skinned.len();
     report.left_out = leave_out(&mut avatar, &posed.vertices, &body.triangles, camera);
     report.timings = clock.finish();
     Ok((avatar, report))

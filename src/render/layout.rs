@@ -53,14 +53,14 @@ pub struct SortPass {
 }
 const _: () = assert!(size_of::<SortPass>() == 16);
 
-/// shaders/rig.wgsl: the counts of the two Gaussian sets and of the mesh's triangles.
+/// shaders/rig.wgsl: the counts of the three Gaussian sets and of the mesh's triangles.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct RigParams {
     pub template_count: u32,
     pub uv_count: u32,
     pub triangle_count: u32,
-    pub _pad: u32,
+    pub skinned_count: u32,
 }
 const _: () = assert!(size_of::<RigParams>() == 16);
 
@@ -87,6 +87,20 @@ pub struct UvGaussian {
     pub _pad: f32,
 }
 const _: () = assert!(size_of::<UvGaussian>() == 64);
+
+/// A skinned Gaussian bound to up to four vertices.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct SkinnedGaussian {
+    pub vertices: [u32; 4],
+    pub weights: [f32; 4],
+    pub offset: [f32; 3],
+    pub opacity: f32,
+    pub rot: [f32; 4],
+    pub scale: [f32; 3],
+    pub _pad: f32,
+}
+const _: () = assert!(size_of::<SkinnedGaussian>() == 80);
 
 /// A posed vertex: its position and the linear part of its skinning transform (columns, each
 /// padded to four floats as WGSL's `mat3x3<f32>` is).

@@ -200,6 +200,7 @@ pub struct SplatPipelines {
     pub(crate) rig_frames: wgpu::ComputePipeline,
     pub(crate) rig_template: wgpu::ComputePipeline,
     pub(crate) rig_uv: wgpu::ComputePipeline,
+    pub(crate) rig_skinned: wgpu::ComputePipeline,
     pub tuning: RasterTuning,
     pub storage: FeatureStorage,
     rasterize: Mutex<HashMap<u32, wgpu::ComputePipeline>>,
@@ -352,6 +353,7 @@ impl SplatPipelines {
                 Storage { read_only: true },
                 rw(),
                 rw(),
+                Storage { read_only: true },
             ],
         );
         let m = shader::module(device, "rig.wgsl", shader::RIG, &[]);
@@ -359,6 +361,7 @@ impl SplatPipelines {
         let rig_template =
             compute_pipeline(device, "Rig::template", &rig_layout, &m, "template_main");
         let rig_uv = compute_pipeline(device, "Rig::uv", &rig_layout, &m, "uv_main");
+        let rig_skinned = compute_pipeline(device, "Rig::skinned", &rig_layout, &m, "skinned_main");
         Self {
             preprocess_layout,
             preprocess,
@@ -380,6 +383,7 @@ impl SplatPipelines {
             rig_frames,
             rig_template,
             rig_uv,
+            rig_skinned,
             tuning,
             storage,
             rasterize: Mutex::new(HashMap::new()),

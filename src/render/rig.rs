@@ -7,7 +7,9 @@
 
 use std::sync::Arc;
 
-use super::layout::{PosedVertex, RigParams, TRIANGLE_FRAME_SIZE, TemplateGaussian, UvGaussian};
+use super::layout::{
+    PosedVertex, RigParams, SkinnedGaussian, TRIANGLE_FRAME_SIZE, TemplateGaussian, UvGaussian,
+};
 use super::pipelines::{SplatPipelines, dispatch_1d};
 use super::scan::entry;
 use super::{SplatError, Splatter};
@@ -18,6 +20,7 @@ use crate::body::PosedBody;
 pub struct GpuAvatar {
     pipes: Arc<SplatPipelines>,
     template_count: u32,
+    skinned_count: u32,
     /// UV Gaussians in all, the last `outside` of them on parts the photo did not show.
     uv_total: u32,
     outside: u32,
@@ -26,7 +29,7 @@ pub struct GpuAvatar {
     triangle_count: u32,
     channels: u32,
     body: (String, usize, usize),
-    /// Template then UV features, Gaussian-major: written into the splatter once per
+    /// Template, skinned then UV features, Gaussian-major: written into the splatter once per
     /// reallocation of its buffers (they live there, where the rasterizer reads them).
     features: Vec<f32>,
     /// The clothing the avatar wears, applied to each pose on the CPU before it goes up, with the
@@ -37,6 +40,7 @@ pub struct GpuAvatar {
     dressing: Dressing,
     params: wgpu::Buffer,
     template: wgpu::Buffer,
+    skinned: wgpu::Buffer,
     uv: wgpu::Buffer,
     triangles: wgpu::Buffer,
     posed: wgpu::Buffer,
@@ -100,18 +104,32 @@ impl GpuAvatar {
                 _pad: 0.0,
             })
             .collect();
+        let k = &avatar.skinned;
+        let skinned: Vec<SkinnedGaussian> = (0..k.len())
+            .map(|i| SkinnedGaussian {
+                vertices: k.vertices[i],
+                weights: k.weights[i],
+                offset: k.offsets[i],
+                opacity: k.local.opacities[i],
+                rot: k.local.rotations[i],
+                scale: k.local.scales[i],
+                _pad: 0.0,
+            })
+            .collect();
         let params = RigParams {
             template_count: template.len() as u32,
             uv_count: (uv.len() - avatar.outside) as u32,
             triangle_count: triangles.len() as u32,
-            _pad: 0,
+            skinned_count: skinned.len() as u32,
         };
         let storage = wgpu::BufferUsages::STORAGE;
         let flat: Vec<u32> = triangles.iter().flatten().copied().collect();
         let mut features = t.features.clone();
+        features.extend_from_slice(&k.local.features);
         features.extend_from_slice(&u.local.features);
         Self {
             template_count: params.template_count,
+            skinned_count: params.skinned_count,
             uv_total: uv.len() as u32,
             outside: avatar.outside as u32,
             show_outside: false,
@@ -143,6 +161,12 @@ impl GpuAvatar {
                 device,
                 "Rig::template",
                 bytemuck::cast_slice(&template),
+                storage,
+            ),
+            skinned: constant(
+                device,
+                "Rig::skinned",
+                bytemuck::cast_slice(&skinned),
                 storage,
             ),
             uv: constant(device, "Rig::uv", bytemuck::cast_slice(&uv), storage),
@@ -179,9 +203,9 @@ impl GpuAvatar {
         }
     }
 
-    /// Gaussians drawn: template then UV.
+    /// Gaussians drawn: template, skinned, then UV.
     pub fn len(&self) -> usize {
-        (self.template_count + self.uv_count()) as usize
+        (self.template_count + self.skinned_count + self.uv_count()) as usize
     }
 
     /// Draws the parts the photo did not show (in neutral grey) too, or not; takes effect at the
@@ -195,7 +219,7 @@ impl GpuAvatar {
             template_count: self.template_count,
             uv_count: self.uv_count(),
             triangle_count: self.triangle_count,
-            _pad: 0,
+            skinned_count: self.skinned_count,
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
     }
@@ -234,6 +258,7 @@ impl GpuAvatar {
                 entry(4, &self.posed),
                 entry(5, &self.frames),
                 entry(6, output),
+                entry(7, &self.skinned),
             ],
         });
         self.bound = Some((generation, bind));
@@ -292,6 +317,7 @@ impl GpuAvatar {
         for (pipeline, count) in [
             (&self.pipes.rig_frames, self.triangle_count),
             (&self.pipes.rig_template, self.template_count),
+            (&self.pipes.rig_skinned, self.skinned_count),
             (&self.pipes.rig_uv, self.uv_count()),
         ] {
             pass.set_pipeline(pipeline);

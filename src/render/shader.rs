@@ -92,8 +92,8 @@ pub fn module(
 #[cfg(test)]
 mod tests {
     use crate::render::layout::{
-        FrameUniform, GpuGaussian, PROJECTED_SIZE, PosedVertex, RigParams, ScanParams, SortPass,
-        TRIANGLE_FRAME_SIZE, TemplateGaussian, UvGaussian,
+        FrameUniform, GpuGaussian, PROJECTED_SIZE, PosedVertex, RigParams, ScanParams,
+        SkinnedGaussian, SortPass, TRIANGLE_FRAME_SIZE, TemplateGaussian, UvGaussian,
     };
     use crate::render::present::PresentUniform;
     use crate::render::{FeatureStorage, shader};
@@ -234,7 +234,13 @@ mod tests {
             layout(&rig, "RigParams"),
             (
                 size_of::<RigParams>() as u32,
-                offsets!(RigParams, template_count, uv_count, triangle_count, _pad)
+                offsets!(
+                    RigParams,
+                    template_count,
+                    uv_count,
+                    triangle_count,
+                    skinned_count
+                )
             )
         );
         assert_eq!(
@@ -250,6 +256,22 @@ mod tests {
                 size_of::<UvGaussian>() as u32,
                 offsets!(
                     UvGaussian, bary, triangle, offset, opacity, rot, scale, _pad
+                )
+            )
+        );
+        assert_eq!(
+            layout(&rig, "SkinnedGaussian"),
+            (
+                size_of::<SkinnedGaussian>() as u32,
+                offsets!(
+                    SkinnedGaussian,
+                    vertices,
+                    weights,
+                    offset,
+                    opacity,
+                    rot,
+                    scale,
+                    _pad
                 )
             )
         );

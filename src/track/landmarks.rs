@@ -5,7 +5,9 @@
 
 use std::time::{Duration, Instant};
 
-use crate::keypoints::{Detections, HandLandmarks, Landmarkers, PoseKeypoints, Roi, Side};
+use crate::keypoints::{
+    Detections, HandLandmarks, Landmarkers, PersonDetection, PoseKeypoints, Roi, Side,
+};
 use crate::onnx::OnnxError;
 use crate::photo::SourceImage;
 
@@ -140,6 +142,8 @@ impl LandmarkTracker {
             hands,
             irises,
             person: None,
+            segmentation: None,
+            others: Vec::new(),
         };
         Ok((found, runs))
     }
@@ -167,7 +171,8 @@ impl LandmarkTracker {
         if pose.presence < MIN_POSE_PRESENCE && self.since_search >= SEARCH_EVERY {
             runs.person_search = true;
             self.since_search = 0;
-            if let Some(person) = models.detector.detect(source)? {
+            let people = models.detector.detect(source)?;
+            if let Some(person) = PersonDetection::central(&people, source.size as f32) {
                 let cropped = models.pose.detect(source, Some(person.roi))?;
                 if cropped.seen() > pose.seen() {
                     pose = cropped;

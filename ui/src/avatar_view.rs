@@ -37,7 +37,8 @@ pub struct AvatarState {
 impl AvatarState {
     /// The Gaussians drawn: template and UV, without the parts left out unless they are shown.
     pub fn drawn(&self) -> usize {
-        self.avatar.template.len() + self.avatar.shown_uv(self.show_outside)
+        let a = &self.avatar;
+        a.template.len() + a.skinned.len() + a.shown_uv(self.show_outside)
     }
 
     pub fn new(

@@ -74,9 +74,10 @@ impl BodyState {
     }
 
     /// Builds the body with `avatar`'s identity: its shape coefficients on the pose and, on an
-    /// EHM body, its joint offsets and head and hand scales on the model.
+    /// EHM body, its joint offsets and head and hand scales on the model. The pose starts as the
+    /// avatar's photo shows it ([`Avatar::base_pose`]).
     pub fn take_identity(&mut self, avatar: &Avatar) {
-        avatar.apply_identity(&*self.model, &mut self.pose);
+        self.pose = avatar.base_pose(&*self.model);
         if self.model.is_ehm()
             && let Some(ehm) = Arc::make_mut(&mut self.model).ehm_mut()
         {

@@ -254,17 +254,19 @@ impl GuavaApp {
             return self.error(format!("{}: {e}; the current view is kept", path.display()));
         }
         body.take_identity(&avatar);
+        if let Some(motion) = &mut self.motion {
+            motion.resample();
+        }
         let mut label = format!("{} — {}", avatar.kind.label(), avatar.source);
         if let Some(summary) = summary {
             label.push_str("; ");
             label.push_str(&summary);
         }
         self.info(format!(
-            "{}: {} Gaussians ({} template + {} UV), {} channels",
+            "{}: {} Gaussians ({}), {} channels",
             file_name(path),
             avatar.len(),
-            avatar.template.len(),
-            avatar.uv.local.len(),
+            avatar.composition(),
             avatar.channels
         ));
         // Made again from the same photo (the fit adjusted): keep how the last one compared.

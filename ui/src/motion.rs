@@ -50,6 +50,12 @@ impl Motion {
         self.sampled_at = None;
     }
 
+    /// Writes the pose again on the next update (the pose was replaced underneath: a new
+    /// avatar's photo pose).
+    pub fn resample(&mut self) {
+        self.sampled_at = None;
+    }
+
     fn refresh_notes(&mut self) {
         self.notes = self.import_notes.clone();
         self.notes.extend(self.retarget.report.lines());

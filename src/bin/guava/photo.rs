@@ -82,11 +82,10 @@ pub fn reconstruct(
     let avatar = &outcome.avatar;
     avatar.save(out)?;
     println!(
-        "{}: {} ({} template + {} UV Gaussians, {} channels) → {}",
+        "{}: {} ({} Gaussians, {} channels) → {}",
         image.display(),
         avatar.kind.label(),
-        avatar.template.len(),
-        avatar.uv.local.len(),
+        avatar.composition(),
         avatar.channels,
         out.display()
     );
@@ -404,7 +403,7 @@ impl Eval<'_> {
         eprintln!(
             "  avatar from frame {reference_frame}: {} ({} Gaussians)",
             outcome.avatar.kind.label(),
-            outcome.avatar.template.len() + outcome.avatar.uv.local.len()
+            outcome.avatar.len()
         );
         self.on(outcome.avatar, &body)
     }

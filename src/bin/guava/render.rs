@@ -211,7 +211,11 @@ fn posed_avatar(
     time: f64,
     rig: &mut Rig,
 ) -> Result<(GaussianCloud, Option<Camera>)> {
-    let mut pose = BodyPose::rest(body);
+    // A motion starts from the photo's pose: joints it does not drive stay as the photo shows.
+    let mut pose = match posing {
+        Posing::Rest => BodyPose::rest(body),
+        _ => avatar.base_pose(body),
+    };
     let camera = match posing {
         Posing::Rest => None,
         Posing::Motion(t, retarget) => {

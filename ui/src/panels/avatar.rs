@@ -20,10 +20,9 @@ impl GuavaApp {
         ui.label(&avatar.label);
         let a = &avatar.avatar;
         ui.label(format!(
-            "{} Gaussians: {} template + {} UV · {} channels ({})",
+            "{} Gaussians: {} · {} channels ({})",
             a.len(),
-            a.template.len(),
-            a.uv.local.len(),
+            a.composition(),
             a.channels,
             match a.kind {
                 AvatarKind::DefaultReconstruction => "RGB, source confidence",

@@ -1,0 +1,168 @@
+//! Colours for the body's back, which one photo from the front cannot show (default mode). Left
+//! to the texture's inpainting, the back took the colours nearest it in the UV map (the neck's
+//! and the arms' skin: a bare back under a jacket) or a print mirrored from the front. Here each
+//! unseen texel facing away from the camera takes what is in front of it through the body, in
+//! the rest pose seen from the front, after a median over a hand's width (so the cloth's colour
+//! comes through and a badge or a print does not); the back of the head takes the crown's colour
+//! (hair, or a bald scalp), not the face's.
+
+use glam::Vec3;
+
+use super::texture::UvTexture;
+use super::uv_map::UvMap;
+use crate::body::{BodyModel, vertex_normals};
+
+/// The front image's cell (metres) and the median's half width in cells (±9 cm).
+const CELL: f32 = 0.01;
+const MEDIAN_RADIUS: i32 = 9;
+/// A texel faces away from the camera when its rest normal's z is below this.
+const FACING_BACK: f32 = -0.2;
+/// The crown: the top this many metres of the head the photo shows (the hair, or a cap, or a
+/// bald scalp; lower, the forehead would give a bare back of the head).
+const CROWN: f32 = 0.03;
+
+/// Per texel of `uv`: a colour for the back where one can be said, else `None` (seen texels,
+/// texels facing the front or the sides, parts the front shows nothing of).
+pub fn behind(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Vec<Option<[f32; 3]>> {
+    let n = (uv.size * uv.size) as usize;
+    let mut out = vec![None; n];
+    let (mut scratch, mut normals) = (Vec::new(), Vec::new());
+    vertex_normals(
+        &body.vertices,
+        &body.triangles,
+        Some(&body.weld),
+        &mut scratch,
+        &mut normals,
+    );
+    let texel = |i: usize| {
+        let point = uv.point(i, &body.vertices, &body.triangles);
+        let normal = uv.point(i, &normals, &body.triangles);
+        let tri = body.triangles[uv.triangle[i] as usize];
+        let corner = uv.bary[i]
+            .iter()
+            .enumerate()
+            .fold(0, |m, (k, &b)| if b > uv.bary[i][m] { k } else { m });
+        let head = body.part_of(tri[corner] as usize) == Some("head");
+        (point, normal, head)
+    };
+    let points: Vec<(usize, Vec3, Vec3, bool)> = uv
+        .texels
+        .iter()
+        .map(|&t| {
+            let (p, nrm, head) = texel(t as usize);
+            (t as usize, p, nrm, head)
+        })
+        .collect();
+    let seen = |i: usize| texture.confidence[i] > 0.0;
+    let Some(mut front) = FrontImage::new(&points, texture) else {
+        return out;
+    };
+    // The crown: the seen head texels within CROWN of the highest seen one (a photo cut
+    // through the hair still shows its colour at its top edge).
+    let top = points
+        .iter()
+        .filter(|p| p.3 && seen(p.0))
+        .map(|p| p.1.y)
+        .fold(f32::MIN, f32::max);
+    let crown: Vec<[f32; 3]> = points
+        .iter()
+        .filter(|p| p.3 && p.1.y >= top - CROWN && seen(p.0))
+        .map(|p| texture.rgb[p.0])
+        .collect();
+    let crown = median(crown);
+    for &(i, point, normal, head) in &points {
+        if seen(i) || normal.z >= FACING_BACK * normal.length() {
+            continue;
+        }
+        out[i] = match head {
+            true => crown,
+            false => front.median_at(point),
+        };
+    }
+    out
+}
+
+/// The seen texels facing the front, drawn orthographically from the front in the rest pose:
+/// per cell the colour of the front-most.
+struct FrontImage {
+    origin: glam::Vec2,
+    width: i32,
+    height: i32,
+    /// Per cell: depth (z) and colour of the front-most seen texel.
+    cells: Vec<Option<(f32, [f32; 3])>>,
+    /// Per cell, its median once asked for (a back's texels share cells).
+    medians: Vec<Option<Option<[f32; 3]>>>,
+}
+
+impl FrontImage {
+    fn new(points: &[(usize, Vec3, Vec3, bool)], texture: &UvTexture) -> Option<Self> {
+        let seen: Vec<&(usize, Vec3, Vec3, bool)> = points
+            .iter()
+            .filter(|p| texture.confidence[p.0] > 0.0 && p.2.z > 0.0)
+            .collect();
+        let (lo, hi) = seen
+            .iter()
+            .fold((glam::Vec2::MAX, glam::Vec2::MIN), |(lo, hi), p| {
+                (lo.min(p.1.truncate()), hi.max(p.1.truncate()))
+            });
+        if seen.is_empty() || !(lo.is_finite() && hi.is_finite()) {
+            return None;
+        }
+        let size = ((hi - lo) / CELL).ceil().as_ivec2() + 1;
+        let mut image = Self {
+            origin: lo,
+            width: size.x,
+            height: size.y,
+            cells: vec![None; (size.x * size.y) as usize],
+            medians: vec![None; (size.x * size.y) as usize],
+        };
+        for p in seen {
+            let Some(k) = image.index(p.1) else { continue };
+            if image.cells[k].is_none_or(|(z, _)| p.1.z > z) {
+                image.cells[k] = Some((p.1.z, texture.rgb[p.0]));
+            }
+        }
+        Some(image)
+    }
+
+    fn cell(&self, point: Vec3) -> glam::IVec2 {
+        ((point.truncate() - self.origin) / CELL).floor().as_ivec2()
+    }
+
+    fn index(&self, point: Vec3) -> Option<usize> {
+        let c = self.cell(point);
+        (c.x >= 0 && c.y >= 0 && c.x < self.width && c.y < self.height)
+            .then(|| (c.y * self.width + c.x) as usize)
+    }
+
+    /// The median colour of the cells around `point`'s, `None` where none is seen.
+    fn median_at(&mut self, point: Vec3) -> Option<[f32; 3]> {
+        let k = self.index(point)?;
+        if let Some(known) = self.medians[k] {
+            return known;
+        }
+        let c = self.cell(point);
+        let mut colours = Vec::new();
+        for y in (c.y - MEDIAN_RADIUS).max(0)..=(c.y + MEDIAN_RADIUS).min(self.height - 1) {
+            for x in (c.x - MEDIAN_RADIUS).max(0)..=(c.x + MEDIAN_RADIUS).min(self.width - 1) {
+                if let Some((_, rgb)) = self.cells[(y * self.width + x) as usize] {
+                    colours.push(rgb);
+                }
+            }
+        }
+        self.medians[k] = Some(median(colours));
+        self.medians[k].flatten()
+    }
+}
+
+/// The per-channel median of `colours`, `None` for none.
+fn median(mut colours: Vec<[f32; 3]>) -> Option<[f32; 3]> {
+    if colours.is_empty() {
+        return None;
+    }
+    let mid = colours.len() / 2;
+    Some([0, 1, 2].map(|c| {
+        colours.select_nth_unstable_by(mid, |a, b| a[c].total_cmp(&b[c]));
+        colours[mid][c]
+    }))
+}
