@@ -9,6 +9,7 @@ mod body;
 mod cli;
 mod ehm;
 mod ehm_fit;
+mod everyday_photos;
 mod faults;
 mod fidelity;
 mod fit;
