@@ -8,6 +8,7 @@ pub mod avatar;
 pub mod body;
 pub mod camera;
 pub mod eval;
+pub mod export;
 pub mod fit;
 pub mod gaussians;
 pub mod gpu;

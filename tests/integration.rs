@@ -10,6 +10,7 @@ mod cli;
 mod ehm;
 mod ehm_fit;
 mod everyday_photos;
+mod export_gltf;
 mod faults;
 mod fidelity;
 mod fit;

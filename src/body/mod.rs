@@ -30,6 +30,7 @@ pub use frames::{TriangleFrame, triangle_frames};
 pub use glb::BodyAssetError;
 pub use head_size::HEAD_SIZE;
 pub use joint_map::{SMPLX_JOINTS, smplx_to_default};
+pub use lbs::rodrigues;
 pub use normals::vertex_normals;
 pub use points::PointPoser;
 pub use pose::{BodyPose, Posable, PoseError, PosedBody};

@@ -305,6 +305,33 @@ impl GuavaApp {
         Ok(())
     }
 
+    /// Writes the avatar as a rigged glTF other tools animate (`guava export`): the skinned body
+    /// with its texture and expression targets, its splats bound to the skeleton, and the
+    /// timeline's motion as the animation.
+    pub fn export_animatable(&mut self, out: &Path) -> Result<(), String> {
+        let Some(avatar) = &self.avatar else {
+            return Err("no avatar to export".into());
+        };
+        let Some(model) = self.body.as_ref().and_then(|b| b.model.template()) else {
+            return Err("the animatable export takes avatars of the default body (GUAVA mode's EHM body is not exported yet)".into());
+        };
+        let tracking = self.motion.as_ref().map(|m| m.sampler().0);
+        let written =
+            guava::export::export(&avatar.avatar, model, tracking.as_deref(), out, &mut |_| {
+                true
+            })
+            .map_err(|e| format!("{}: {e}", out.display()))?;
+        self.info(format!(
+            "wrote {} ({} joints, {} morph targets, {} splats, {} animation frames)",
+            out.display(),
+            written.joints,
+            written.morph_targets,
+            written.splats,
+            written.frames
+        ));
+        Ok(())
+    }
+
     /// The export window: size, camera path and rate, and what to write.
     pub(crate) fn export_ui(&mut self, ctx: &egui::Context) {
         let mut open = self.export.open;
@@ -343,6 +370,7 @@ impl GuavaApp {
                         ("Sequence…", Action::Sequence),
                         ("Posed avatar as PLY…", Action::Ply),
                         ("Posed mesh as glTF…", Action::Mesh),
+                        ("Animatable avatar (glTF)…", Action::Animatable),
                     ] {
                         if ui.button(label).clicked() {
                             action = Some(a);
@@ -382,6 +410,9 @@ impl GuavaApp {
             Some(Action::Mesh) => {
                 save("glb", "glTF").map_or(Ok(()), |p| self.export_posed_mesh(&p))
             }
+            Some(Action::Animatable) => {
+                save("glb", "glTF").map_or(Ok(()), |p| self.export_animatable(&p))
+            }
         };
         if let Err(e) = result {
             self.error(e);
@@ -395,4 +426,5 @@ enum Action {
     Sequence,
     Ply,
     Mesh,
+    Animatable,
 }

@@ -948,6 +948,16 @@ fn exports_write_the_view_a_sequence_a_ply_and_a_mesh() {
     let bytes = std::fs::read(&glb).expect("glb");
     let gltf = gltf::Gltf::from_slice(&bytes).expect("valid glTF");
     assert_eq!(gltf.meshes().count(), 1);
+    // The animatable avatar: the skinned body and the splats, the timeline's motion as a clip
+    // (its content is checked against the rig in the library's export test).
+    let animatable = dir.join("animatable.glb");
+    h.state_mut()
+        .export_animatable(&animatable)
+        .expect("animatable glb");
+    let bytes = std::fs::read(&animatable).expect("animatable glb");
+    let gltf = gltf::Gltf::from_slice_without_validation(&bytes).expect("glTF");
+    assert_eq!((gltf.meshes().count(), gltf.skins().count()), (2, 1));
+    assert_eq!(gltf.animations().count(), 1, "the demo motion is the clip");
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -126,6 +126,20 @@ enum Command {
         #[arg(long)]
         ehm: Option<PathBuf>,
     },
+    /// Write an avatar as a rigged glTF (.glb) other tools can animate: the body as a skinned
+    /// mesh with its baked colour texture and expression morph targets, the avatar's splats
+    /// under KHR_gaussian_splatting bound to the same skeleton, and --motion as an animation.
+    Export {
+        /// The avatar (default body; GUAVA-mode avatars are not exported yet).
+        #[arg(long)]
+        avatar: PathBuf,
+        /// A motion (tracking .json, ARKit .csv, SMPL-X .npz) to write as the animation clip.
+        #[arg(long)]
+        motion: Option<PathBuf>,
+        /// The file to write (.glb).
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// How faithful an avatar is to its photo: the avatar re-rendered from the photo's camera
     /// against the photo × person mask. Prints `iou=… psnr=… ssim=… l1=…` (silhouette IoU; PSNR,
     /// SSIM and mean absolute error of RGB over the person's box). With --video: self-reenactment.
@@ -319,6 +333,11 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Track(args) => track::run(&args),
         Command::Motion { file, out, ehm } => motion(&file, out.as_deref(), ehm.as_deref()),
+        Command::Export {
+            avatar,
+            motion,
+            out,
+        } => export(&avatar, motion.as_deref(), &out),
         Command::Bench { which } => match which {
             Bench::Splat(args) => bench::splat(&args),
             Bench::Body(args) => bench::body(&args),
@@ -330,6 +349,35 @@ fn run(cli: Cli) -> Result<()> {
             Bench::Track(args) => bench::track(&args),
         },
     }
+}
+
+fn export(avatar: &Path, motion: Option<&Path>, out: &Path) -> Result<()> {
+    let started = std::time::Instant::now();
+    let loaded = guava::avatar::Avatar::load(avatar)?;
+    let body = guava::body::BodyModel::default_body()?;
+    let motion = match motion {
+        Some(m) => Some(guava::tracking::import::open_motion(m)?.tracking),
+        None => None,
+    };
+    let written = guava::export::export(&loaded, &body, motion.as_ref(), out, &mut |done| {
+        eprint!("\r  exporting… {:3.0} %", 100.0 * done);
+        true
+    })
+    .map_err(|e| anyhow::anyhow!("{}: {e}", avatar.display()))?;
+    eprintln!();
+    println!(
+        "{} → {}: {} joints, {} vertices, {} morph targets, {} splats, {} animation frames; {:.1} MB in {:.2} s",
+        avatar.display(),
+        out.display(),
+        written.joints,
+        written.vertices,
+        written.morph_targets,
+        written.splats,
+        written.frames,
+        written.bytes as f64 / 1e6,
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
 }
 
 fn motion(file: &Path, out: Option<&Path>, ehm: Option<&Path>) -> Result<()> {
