@@ -75,6 +75,12 @@ pub struct GpuContext {
 impl GpuContext {
     /// Opens the highest-performance adapter on the primary backends (Vulkan, Metal, DX12).
     pub fn headless() -> Result<Self, GpuError> {
+        Self::headless_with(|_| {})
+    }
+
+    /// [`Self::headless`] with the device's limits changed by `adjust` (tests lower them to
+    /// reach an adapter's edge cheaply, whatever the adapter).
+    pub fn headless_with(adjust: impl FnOnce(&mut wgpu::Limits)) -> Result<Self, GpuError> {
         let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY);
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends,
@@ -86,13 +92,15 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|_| GpuError::NoAdapter { backends })?;
-        let (device, queue) = pollster::block_on(
-            adapter.request_device(&device_descriptor(&adapter)),
-        )
-        .map_err(|source| GpuError::RequestDevice {
-            adapter: adapter.get_info().name,
-            source,
-        })?;
+        let mut descriptor = device_descriptor(&adapter);
+        adjust(&mut descriptor.required_limits);
+        let (device, queue) =
+            pollster::block_on(adapter.request_device(&descriptor)).map_err(|source| {
+                GpuError::RequestDevice {
+                    adapter: adapter.get_info().name,
+                    source,
+                }
+            })?;
         Ok(Self {
             adapter,
             device,
