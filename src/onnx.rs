@@ -142,15 +142,37 @@ impl OnnxRuntime {
                 reason: "no such file".into(),
             });
         }
-        let inner = ort::session::Session::builder(&self.env)
-            .map_err(model_err)?
-            .with_execution_providers(execution_providers())
-            .map_err(|e| model_err(e.into()))?
-            .commit_from_file(path)
-            .map_err(model_err)?;
+        // Each requested provider on its own, so that the session can say which registered and
+        // why one did not (asked together, ONNX Runtime skips failures silently).
+        let mut builder = ort::session::Session::builder(&self.env).map_err(model_err)?;
+        let (mut registered, mut failed) = (Vec::new(), Vec::new());
+        for (name, provider) in execution_providers() {
+            builder = match builder.with_execution_providers([provider.error_on_failure()]) {
+                Ok(b) => {
+                    registered.push(name);
+                    b
+                }
+                Err(e) => {
+                    failed.push(format!("{name} did not register: {e}"));
+                    e.recover()
+                }
+            };
+        }
+        let inner = builder.commit_from_file(path).map_err(model_err)?;
+        let mut engine = match registered.is_empty() {
+            true => "ONNX Runtime (CPU)".to_string(),
+            false => format!(
+                "ONNX Runtime ({}; operators it lacks on the CPU)",
+                registered.join(", ")
+            ),
+        };
+        if !failed.is_empty() {
+            engine += &format!(" — {}", failed.join("; "));
+        }
         Ok(Session {
             inner,
             path: path.to_path_buf(),
+            engine,
         })
     }
 }
@@ -158,14 +180,14 @@ impl OnnxRuntime {
 /// The GPU execution providers this build asks for, in order (cargo features `cuda`, `directml`,
 /// `coreml`; none by default): each that the loaded library cannot register is skipped and the
 /// session runs on the CPU (checked with `cuda` against the CPU build: the same images).
-fn execution_providers() -> Vec<ort::ep::ExecutionProviderDispatch> {
+fn execution_providers() -> Vec<(&'static str, ort::ep::ExecutionProviderDispatch)> {
     vec![
         #[cfg(feature = "cuda")]
-        ort::ep::CUDA::default().build(),
+        ("CUDA", ort::ep::CUDA::default().build()),
         #[cfg(feature = "directml")]
-        ort::ep::DirectML::default().build(),
+        ("DirectML", ort::ep::DirectML::default().build()),
         #[cfg(feature = "coreml")]
-        ort::ep::CoreML::default().build(),
+        ("CoreML", ort::ep::CoreML::default().build()),
     ]
 }
 
@@ -191,6 +213,9 @@ pub fn requested_providers() -> String {
 pub struct Session {
     inner: ort::session::Session,
     pub path: PathBuf,
+    /// What runs it: "ONNX Runtime (CPU)", or the GPU providers that registered, and any that
+    /// were asked for and did not, with ONNX Runtime's reason.
+    pub engine: String,
 }
 
 pub struct TensorF32 {

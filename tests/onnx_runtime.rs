@@ -40,6 +40,18 @@ fn runs_a_model_and_matches_the_reference_evaluator() {
     assert_eq!(runtime.version, guava::onnx::PINNED_VERSION);
     let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/tiny_mlp.onnx");
     let mut session = runtime.session(&model).expect("model loads");
+    // Says what runs it: the CPU in the default build; with a GPU provider's cargo feature,
+    // the provider by name, registered or with why it did not (the shipped library is the
+    // CPU build, so here it does not).
+    println!("engine: {}", session.engine);
+    match guava::onnx::requested_providers().starts_with("none") {
+        true => assert_eq!(session.engine, "ONNX Runtime (CPU)"),
+        false => {
+            for name in guava::onnx::requested_providers().split(", ") {
+                assert!(session.engine.contains(name), "{}", session.engine);
+            }
+        }
+    }
     assert_eq!(session.input_names(), ["x"]);
     assert_eq!(session.output_names(), ["y"]);
     let (in_shape, input, out_shape, expected) = fixture();

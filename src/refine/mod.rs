@@ -247,10 +247,11 @@ impl Refiner {
         })
     }
 
-    /// Where it runs, for the UI and reports.
-    pub fn engine_name(&self) -> &'static str {
-        match self.engine {
-            Engine::OnnxRuntime(_) => "ONNX Runtime (CPU)",
+    /// Where it runs, for the UI and reports: ONNX Runtime with the providers that actually
+    /// registered (and any asked for that did not), or our WGSL passes.
+    pub fn engine_name(&self) -> &str {
+        match &self.engine {
+            Engine::OnnxRuntime(session) => &session.engine,
             Engine::Wgsl(_) => "WGSL compute passes",
         }
     }

@@ -283,6 +283,11 @@ impl GuavaApp {
         self.avatar.as_ref().map(|a| (a.label.as_str(), a.drawn()))
     }
 
+    /// The view the avatar was made from (its photo's pose and camera), when it keeps one.
+    pub fn avatar_source_view(&self) -> Option<&guava::tracking::SourceView> {
+        self.avatar.as_ref()?.avatar.source_view.as_ref()
+    }
+
     /// How the avatar compares with its photo from the photo's camera (and how the previous
     /// avatar of the same photo did), or why it was not compared; `None` for avatars not made here.
     pub fn avatar_fidelity(&self) -> Option<Result<(Metrics, Option<Metrics>), &str>> {
@@ -372,8 +377,11 @@ impl GuavaApp {
     }
 
     /// Where the last refined frame was refined (`Refiner::engine_name`).
-    pub fn refined_engine(&self) -> Option<&'static str> {
-        self.refined.last_ms.map(|(_, engine)| engine)
+    pub fn refined_engine(&self) -> Option<&str> {
+        self.refined
+            .last_ms
+            .as_ref()
+            .map(|(_, engine)| engine.as_str())
     }
 
     /// Refines while the user drags or plays too (the latest refined frame stays on screen).

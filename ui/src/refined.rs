@@ -37,7 +37,7 @@ struct Refined {
     /// Time to draw, refine and read it back.
     millis: f32,
     /// Where it ran (`Refiner::engine_name`).
-    engine: &'static str,
+    engine: String,
 }
 
 pub struct RefinedView {
@@ -52,7 +52,7 @@ pub struct RefinedView {
     shown: Option<(RefineKey, egui::TextureHandle)>,
     /// The last refined frame's cost and where it ran, and the last error (shown in the
     /// display panel).
-    pub last_ms: Option<(f32, &'static str)>,
+    pub last_ms: Option<(f32, String)>,
     pub error: Option<String>,
     /// Why the avatar on screen has no refiner to run (shown in the display panel).
     pub unavailable: Option<String>,
@@ -176,6 +176,8 @@ fn refine(
             rgb.as_raw(),
         ),
         millis: started.elapsed().as_secs_f32() * 1e3,
-        engine: refiner.as_ref().map_or("", |r| r.engine_name()),
+        engine: refiner
+            .as_ref()
+            .map_or(String::new(), |r| r.engine_name().to_string()),
     })
 }

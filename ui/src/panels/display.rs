@@ -101,7 +101,7 @@ impl GuavaApp {
                      faster, and for GUAVA's refiner, whose operators the passes do not run",
                 );
         });
-        if let Some((ms, engine)) = self.refined.last_ms {
+        if let Some((ms, engine)) = &self.refined.last_ms {
             ui.label(format!("last refined frame: {ms:.0} ms, {engine}"));
         }
         if let Some(e) = &self.refined.error {
@@ -168,7 +168,7 @@ impl GuavaApp {
                     }
                     None => row("GPU stages", "no timestamps here".into()),
                 }
-                if let Some((ms, engine)) = self.refined.last_ms {
+                if let Some((ms, engine)) = &self.refined.last_ms {
                     row("refine (last)", format!("{ms:.0} ms, {engine}"));
                 }
                 row(
