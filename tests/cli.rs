@@ -267,10 +267,11 @@ fn fit_frames_the_person_and_reconstruct_reads_the_frame() {
     assert!(ok, "{stderr}");
     assert!(stdout.contains(", framed "), "{stdout}");
     let fitted = guava::tracking::Tracking::load(&tracking).expect("a valid tracking file");
-    let [_, top, side] = fitted.frames[0]
+    let crop = fitted.frames[0]
         .camera
         .and_then(|c| c.crop)
         .expect("the frame is written");
+    let [_, top, side] = crop;
     // The portrait's person reaches its top and bottom: the square holds all 512 rows.
     assert!(top <= 0 && top + side >= 512, "{top}, {side}");
     let avatar = dir.join("tall.guava");
@@ -281,7 +282,11 @@ fn fit_frames_the_person_and_reconstruct_reads_the_frame() {
         "--out",
         avatar.to_str().expect("utf-8"),
     ]);
-    assert!(ok && avatar.exists(), "{stdout}{stderr}");
+    assert!(ok, "{stdout}{stderr}");
+    // It reconstructed from the framed square the tracking file gives, not the centred one.
+    let made = guava::avatar::Avatar::load(&avatar).expect("a valid avatar");
+    let view = made.source_view.expect("the avatar keeps its photo's view");
+    assert_eq!(view.crop.map(|c| c.to_array()), Some(crop), "{stdout}");
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -696,10 +701,37 @@ fn report_quick_writes_every_file_with_finite_numbers() {
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(
         rows.len(),
-        (6 + 1 + 1) * 2 * 2,
-        "6 Gaussian sets at the default UV side, all of them stored as f16 and all of one other \
-         UV side × 2 output sides × refiner off/on"
+        (4 + 1 + 1) * 2 * 2,
+        "4 Gaussian sets at the default UV side (the two prunings remove nothing from a \
+         default avatar, whose UV Gaussians are all 0.95 opaque, and are left out), all of them \
+         stored as f16 and all of one other UV side × 2 output sides × refiner off/on"
     );
+    assert!(
+        !tradeoffs.contains("UV pruned"),
+        "pruning rows that repeat \"all\""
+    );
+    assert!(
+        read("report.md").contains("Left out, as they remove no Gaussian"),
+        "the note names them"
+    );
+    // Savings: the refiner's row is measured on both sides (it wrote a literal 0 for "with"),
+    // and the idle frames, which cannot be timed, are not given a time.
+    let savings = read("savings.csv");
+    let cells = |start: &str| -> Vec<String> {
+        let row = savings.lines().find(|l| l.starts_with(start)).expect(start);
+        // After the first cell, which is quoted when it holds a comma.
+        let rest = match row.strip_prefix('"') {
+            Some(quoted) => quoted.split_once("\",").expect("a closing quote").1,
+            None => row.split_once(',').expect("cells").1,
+        };
+        rest.split(',').take(2).map(str::to_string).collect()
+    };
+    let refiner: Vec<f64> = cells("\"the refiner")
+        .iter()
+        .map(|c| c.parse().expect("a time"))
+        .collect();
+    assert!(refiner[0] > 0.0 && refiner[1] > refiner[0], "{refiner:?}");
+    assert_eq!(cells("frames when nothing changed"), ["", ""]);
     for row in &rows {
         for (name, cell) in header.iter().zip(row) {
             if name.ends_with("_ms") || ["psnr_db", "ssim", "iou"].contains(name) {
