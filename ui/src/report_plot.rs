@@ -14,6 +14,9 @@ pub struct Setting {
 
 pub struct ReportPlot {
     pub folder: PathBuf,
+    /// Whose run it is: the repository's committed one or the user's, and the machine its
+    /// `report.md` names.
+    pub whose: String,
     pub settings: Result<Vec<Setting>, String>,
 }
 
@@ -30,21 +33,38 @@ impl ReportPlot {
         let settings = std::fs::read_to_string(&path)
             .map_err(|e| format!("{}: {e}", path.display()))
             .and_then(|text| parse(&text).map_err(|e| format!("{}: {e}", path.display())));
+        let committed = folder.canonicalize().ok() == committed_report().canonicalize().ok();
+        let machine = std::fs::read_to_string(folder.join("report.md"))
+            .ok()
+            .and_then(|md| machine_line(&md));
+        let whose = format!(
+            "{}{}",
+            match committed {
+                true =>
+                    "the run committed with this version (the CI machine), not yours: run \
+                         `guava report --out DIR` and open DIR for your own",
+                false => "your run",
+            },
+            machine.map_or(String::new(), |m| format!(" — {m}"))
+        );
         Self {
             folder: folder.to_path_buf(),
+            whose,
             settings,
         }
     }
 
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
-            ui.label(format!("report: {}", self.folder.display()));
+            ui.label(format!("report: {}", self.folder.display()))
+                .on_hover_text(&self.whose);
             if ui.button("Open report…").clicked()
                 && let Some(dir) = rfd::FileDialog::new().pick_folder()
             {
                 *self = Self::read(&dir);
             }
         });
+        ui.label(egui::RichText::new(&self.whose).small());
         match &self.settings {
             Err(e) => {
                 ui.colored_label(ui.visuals().error_fg_color, e);
@@ -52,6 +72,19 @@ impl ReportPlot {
             Ok(settings) => plot(ui, settings),
         }
     }
+}
+
+/// The adapter and CPU a report was measured on: its `Machine:` line, up to the first period
+/// after the CPU.
+fn machine_line(md: &str) -> Option<String> {
+    let line = md.lines().find_map(|l| l.strip_prefix("Machine: "))?;
+    Some(
+        line.split(". ")
+            .next()
+            .unwrap_or(line)
+            .trim_end_matches('.')
+            .to_string(),
+    )
 }
 
 fn parse(text: &str) -> Result<Vec<Setting>, String> {
@@ -188,6 +221,12 @@ mod tests {
     #[test]
     fn the_committed_report_reads_with_a_pareto_front() {
         let plot = ReportPlot::read(&committed_report());
+        // It says whose run it is and on what machine.
+        assert!(
+            plot.whose.starts_with("the run committed") && plot.whose.contains("llvmpipe"),
+            "{}",
+            plot.whose
+        );
         let settings = plot.settings.expect("docs/report/tradeoffs.csv");
         assert!(settings.len() > 10);
         assert!(settings.iter().any(|s| s.pareto));
@@ -196,6 +235,28 @@ mod tests {
                 .iter()
                 .all(|s| s.total_ms > 0.0 && s.psnr_db.is_finite())
         );
+    }
+
+    #[test]
+    fn a_report_of_ones_own_says_so() {
+        let dir = std::env::temp_dir().join(format!("guava-report-plot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        std::fs::write(
+            dir.join("tradeoffs.csv"),
+            "uv,total_ms,psnr_db,pareto\n448,3.5,22.1,yes\n",
+        )
+        .expect("csv");
+        std::fs::write(
+            dir.join("report.md"),
+            "# guava report\n\nMachine: NVIDIA H200 · Vulkan · DiscreteGpu; CPU X. Subject: …\n",
+        )
+        .expect("md");
+        let plot = ReportPlot::read(&dir);
+        assert_eq!(
+            plot.whose,
+            "your run — NVIDIA H200 · Vulkan · DiscreteGpu; CPU X"
+        );
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]
