@@ -7,9 +7,9 @@
 use std::path::Path;
 
 use guava::body::BodyModel;
+use guava::eval::pairs::{self, Split};
 use guava::onnx::OnnxRuntime;
 use guava::pipeline::Pipeline;
-use guava::refine::pairs::{self, Split};
 use guava::refine::{DEFAULT_REFINER, RefineError, Refiner};
 use guava::render::SplatImage;
 

@@ -5,6 +5,7 @@
 
 pub mod lpips;
 pub mod metrics;
+pub mod pairs;
 pub mod subjects;
 
 pub use metrics::Metrics;

@@ -1,7 +1,7 @@
 //! The refiner pass: the splatting pass's feature image turned into the final picture by a
 //! convolutional network. Two kinds, told apart by the model file:
 //! - the default mode's refiner (`assets/refiner/default_refiner.onnx`, trained by
-//!   `tools/train_refiner.py` on [`pairs`]) reads RGB, the source-confidence channel and alpha at
+//!   `tools/train_refiner.py` on `eval::pairs`) reads RGB, the source-confidence channel and alpha at
 //!   any size, and gives RGB and alpha (premultiplied, on black), so it can also clean the
 //!   silhouette;
 //! - GUAVA's StyleUNet (`guava_refiner.onnx` from `tools/export_guava_onnx.py`) reads all of the
@@ -13,7 +13,6 @@
 //! composited) or, where its operators allow, through our own compute passes on the splatting
 //! device ([`wgsl`]); [`RefinerOn`] chooses.
 
-pub mod pairs;
 pub mod wgsl;
 
 use std::path::{Path, PathBuf};

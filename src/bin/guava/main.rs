@@ -274,8 +274,8 @@ fn run(cli: Cli) -> Result<()> {
         Command::RefinerPairs { out, split } => refiner::write_pairs(
             &out,
             match split {
-                PairSplit::Train => guava::refine::pairs::Split::Train,
-                PairSplit::HeldOut => guava::refine::pairs::Split::HeldOut,
+                PairSplit::Train => guava::eval::pairs::Split::Train,
+                PairSplit::HeldOut => guava::eval::pairs::Split::HeldOut,
             },
         ),
         Command::Reconstruct {

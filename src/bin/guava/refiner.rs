@@ -1,5 +1,5 @@
 //! `guava refiner-pairs`: writes the default refiner's training or held-out pairs
-//! (`guava::refine::pairs`) as NumPy arrays for `tools/train_refiner.py`: `inputs.npy`
+//! (`guava::eval::pairs`) as NumPy arrays for `tools/train_refiner.py`: `inputs.npy`
 //! [N, 5, S, S] (RGB, source confidence, alpha of the avatar's splat image) and `targets.npy`
 //! [N, 4, S, S] (the subject's premultiplied RGB and coverage), 8-bit, with `views.json` saying
 //! which subject, seed and view each row is.
@@ -9,9 +9,9 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use guava::body::BodyModel;
+use guava::eval::pairs::{self, KINDS, SIDE, Split};
 use guava::gpu::GpuContext;
 use guava::pipeline::Pipeline;
-use guava::refine::pairs::{self, KINDS, SIDE, Split};
 use guava::render::HeadlessRenderer;
 
 pub fn write_pairs(out: &Path, split: Split) -> Result<()> {

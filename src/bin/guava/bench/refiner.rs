@@ -8,10 +8,10 @@ use std::time::Instant;
 
 use guava::body::BodyModel;
 use guava::eval::Metrics;
+use guava::eval::pairs::{self, KINDS, Split};
 use guava::gpu::GpuContext;
 use guava::onnx::OnnxRuntime;
 use guava::pipeline::Pipeline;
-use guava::refine::pairs::{self, KINDS, Split};
 use guava::refine::{DEFAULT_REFINER, Refiner};
 use guava::render::{HeadlessRenderer, SplatImage};
 

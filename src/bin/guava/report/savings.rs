@@ -7,8 +7,8 @@ use anyhow::Result;
 use guava::avatar::Avatar;
 use guava::body::{BodyModel, BodyPose, PosedBody};
 use guava::camera::Camera;
+use guava::eval::pairs::{self, View};
 use guava::onnx::OnnxRuntime;
-use guava::refine::pairs::{self, View};
 use guava::refine::{DEFAULT_REFINER, Refiner};
 use guava::render::{GpuAvatar, HeadlessRenderer};
 

@@ -9,9 +9,9 @@
 use anyhow::Result;
 use guava::avatar::{Avatar, LocalGaussians, Rig, UvGaussians};
 use guava::body::{BodyPose, PosedBody};
+use guava::eval::pairs::{self, Pair, View};
 use guava::gaussians::GaussianCloud;
 use guava::onnx::OnnxRuntime;
-use guava::refine::pairs::{self, Pair, View};
 use guava::refine::{DEFAULT_REFINER, Refiner};
 use guava::render::{FeatureStorage, GpuAvatar, HeadlessRenderer, reference};
 use guava::synthetic::{Subject, subject_texture};
