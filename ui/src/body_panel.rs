@@ -11,14 +11,15 @@ use guava::render::mesh::MeshStyle;
 use guava::render::view::{MeshFrame, PoseRef};
 
 use crate::app::next_id;
-use crate::body_model::{SliderGroup, ViewerBody};
+use crate::body_model::SliderGroup;
 use crate::pose_controls::PoseControls;
+use guava::body::AnyBody;
 
 /// Posed positions and normals, shared with the viewport callback without copying.
 type PosedMesh = (Arc<Vec<Vec3>>, Arc<Vec<Vec3>>);
 
 pub struct BodyState {
-    pub model: Arc<ViewerBody>,
+    pub model: Arc<AnyBody>,
     /// Where the model came from, shown in the panel.
     pub label: String,
     /// The pose the motion writes (and the advanced editors edit), before [`Self::controls`].
@@ -44,7 +45,7 @@ pub struct BodyState {
 }
 
 impl BodyState {
-    pub fn new(model: ViewerBody, label: String) -> Self {
+    pub fn new(model: AnyBody, label: String) -> Self {
         let pose = BodyPose::rest(&model);
         let mut rest = PosedBody::default();
         if let Err(e) = model.pose(&pose, &mut rest) {
@@ -55,7 +56,7 @@ impl BodyState {
         Self {
             triangles: Arc::new(model.triangles().to_vec()),
             weld: model.weld().map(|w| Arc::new(w.to_vec())),
-            sliders: model.slider_groups(),
+            sliders: crate::body_model::slider_groups(&model),
             model: Arc::new(model),
             label,
             pose,

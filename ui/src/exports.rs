@@ -15,11 +15,11 @@ use guava::render::view::{AvatarRef, PoseRef};
 use guava::tracking::{Retarget, Tracking};
 
 use crate::app::{GuavaApp, View, next_id};
-use crate::body_model::ViewerBody;
 use crate::jobs::{Job, JobContext, Loaded};
 use crate::offscreen::OffscreenRenderer;
 use crate::orbit::OrbitCamera;
 use crate::pose_controls::PoseControls;
+use guava::body::AnyBody;
 
 /// How the camera moves over an exported sequence.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -96,7 +96,7 @@ impl Shot {
 
 /// The motion and the hand-set pose a sequence is posed from, per frame.
 struct Posing {
-    model: Arc<ViewerBody>,
+    model: Arc<AnyBody>,
     base: BodyPose,
     controls: PoseControls,
     motion: Option<(Arc<Tracking>, Retarget)>,

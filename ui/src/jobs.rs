@@ -16,14 +16,14 @@ use guava::progress::Stage;
 use guava::tracking::import::Imported;
 
 use crate::avatar_view::{Preview, SourcePreview, TrackedPhoto};
-use crate::body_model::ViewerBody;
 use crate::fidelity::{self, Fidelity};
 use crate::offscreen::OffscreenRenderer;
+use guava::body::AnyBody;
 
 /// What a worker thread loaded.
 pub enum Loaded {
     Cloud(GaussianCloud),
-    Body(ViewerBody),
+    Body(AnyBody),
     Motion(Imported),
     /// GUAVA's exported networks (GUAVA mode).
     Networks(Box<GuavaModels>),
@@ -146,7 +146,7 @@ impl Job {
 
 /// What making an avatar of a photo needs from the app, moved to its worker.
 pub struct PhotoJob {
-    pub body: Arc<ViewerBody>,
+    pub body: Arc<AnyBody>,
     pub networks: Option<Arc<Mutex<GuavaModels>>>,
     /// EHM-Tracker's keypoint models folder, when the user chose it.
     pub dwpose: Option<PathBuf>,
@@ -168,10 +168,10 @@ impl PhotoJob {
         };
         let mut progress = job.progress();
         let outcome = match &*self.body {
-            ViewerBody::Template(body) => {
+            AnyBody::Template(body) => {
                 pipeline.reconstruct(Mode::Default(body), photo, tracked, &mut progress)
             }
-            ViewerBody::Ehm(body) => {
+            AnyBody::Ehm(body) => {
                 let networks = self.networks.as_deref().ok_or_else(|| {
                     format!(
                         "{}: GUAVA mode needs GUAVA's networks: open their folder (Mode > \
@@ -200,7 +200,7 @@ impl PhotoJob {
         let mut offscreen = offscreen.lock().unwrap_or_else(|e| e.into_inner());
         let (avatar, view, photo) = (&outcome.avatar, &outcome.view, &outcome.photo);
         let compared = match &*self.body {
-            ViewerBody::Ehm(body) if avatar.ehm_identity.is_some() => {
+            AnyBody::Ehm(body) if avatar.ehm_identity.is_some() => {
                 let mut tracked = body.clone();
                 avatar.apply_ehm_identity(&mut tracked);
                 fidelity::measure(&mut offscreen, avatar, &*tracked, view, photo)
@@ -229,7 +229,7 @@ impl PhotoJob {
         let body = &*self.body;
         let preview = match (photo, body, &report.fit) {
             (None, ..) => None,
-            (Some(photo), ViewerBody::Template(b), fit) => SourcePreview::new(
+            (Some(photo), AnyBody::Template(b), fit) => SourcePreview::new(
                 body,
                 &b.landmarks,
                 photo,
@@ -238,7 +238,7 @@ impl PhotoJob {
                 view,
             )
             .map(|p| Preview::Fit(Box::new(p))),
-            (Some(photo), ViewerBody::Ehm(_), Some(fit)) => SourcePreview::new(
+            (Some(photo), AnyBody::Ehm(_), Some(fit)) => SourcePreview::new(
                 body,
                 &fit.surface,
                 photo,
@@ -247,7 +247,7 @@ impl PhotoJob {
                 view,
             )
             .map(|p| Preview::Fit(Box::new(p))),
-            (Some(photo), ViewerBody::Ehm(_), None) => {
+            (Some(photo), AnyBody::Ehm(_), None) => {
                 TrackedPhoto::new(photo, &view, body).map(Preview::Tracked)
             }
         };

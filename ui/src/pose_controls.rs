@@ -11,7 +11,7 @@
 use glam::Vec3;
 use guava::body::{BodyPose, Posable, PosedBody};
 
-use crate::body_model::ViewerBody;
+use guava::body::AnyBody;
 
 /// What one slider moves: a parameter by the slider's value, or a joint about an axis (in its
 /// world-aligned rest frame) by the value in degrees times the axis's length.
@@ -166,7 +166,7 @@ pub struct PoseControls {
 
 impl PoseControls {
     /// The controls `model` supports, named for people; `rest` is the model posed at rest.
-    pub fn for_body(model: &ViewerBody, rest: &PosedBody) -> Self {
+    pub fn for_body(model: &AnyBody, rest: &PosedBody) -> Self {
         let rig = Rig { model, rest };
         let mut groups = vec![rig.face()];
         groups.extend([Side::Left, Side::Right].map(|s| rig.hand(s)));
@@ -274,7 +274,7 @@ const FINGERS: [(&str, &str, &str); 5] = [
 
 /// Joint lookups on either rig.
 struct Rig<'a> {
-    model: &'a ViewerBody,
+    model: &'a AnyBody,
     rest: &'a PosedBody,
 }
 

@@ -587,7 +587,7 @@ fn guava_mode_reconstructs_a_tracked_photo_on_the_ehm_body() {
     // The body is built with the tracked skeleton.
     let body = h.state_mut().body_mut().expect("body");
     let ehm = match &*body.model {
-        guava_ui::body_model::ViewerBody::Ehm(m) => m,
+        guava::body::AnyBody::Ehm(m) => m,
         _ => panic!("the body is EHM"),
     };
     assert_eq!(EhmIdentityRecord::of(&ehm.identity), identity);

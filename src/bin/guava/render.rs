@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use guava::avatar::{Avatar, Rig};
-use guava::body::{BodyModel, BodyPose, EhmModel, Posable, PosedBody};
+use guava::body::{AnyBody, BodyModel, BodyPose, EhmModel, Posable, PosedBody};
 use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
 use guava::gpu::GpuContext;
@@ -102,12 +102,6 @@ pub enum CameraPath {
     Tracked,
 }
 
-/// The body an avatar is posed on (behind pointers: the two differ several-fold in size).
-enum Body {
-    Default(Box<BodyModel>),
-    Ehm(Box<EhmModel>),
-}
-
 /// What is rendered: a splat file as it is, or an avatar posed per frame.
 enum Subject {
     Splats(GaussianCloud),
@@ -117,7 +111,7 @@ enum Subject {
 /// An avatar, its body and how it is posed.
 struct Posed {
     avatar: Avatar,
-    body: Body,
+    body: AnyBody,
     posing: Posing,
 }
 
@@ -143,23 +137,16 @@ impl Subject {
                     Some(ehm) => {
                         let mut body = EhmModel::load(ehm)?;
                         avatar.apply_ehm_identity(&mut body);
-                        Body::Ehm(Box::new(body))
+                        AnyBody::Ehm(Box::new(body))
                     }
-                    None => Body::Default(Box::new(BodyModel::default_body()?)),
+                    None => AnyBody::Template(std::sync::Arc::new(BodyModel::default_body()?)),
                 };
                 let with_path = |e: String| anyhow::anyhow!("{}: {e}", path.display());
-                match &body {
-                    Body::Default(b) => avatar.check_body(b.as_ref()),
-                    Body::Ehm(b) => avatar.check_body(b.as_ref()),
-                }
-                .map_err(with_path)?;
+                avatar.check_body(&body).map_err(with_path)?;
                 let posing = match (&args.motion, args.source_pose) {
                     (Some(m), _) => {
                         let t = guava::tracking::import::open_motion(m)?.tracking;
-                        let retarget = match &body {
-                            Body::Default(b) => Retarget::new(&t, b.as_ref()),
-                            Body::Ehm(b) => Retarget::new(&t, b.as_ref()),
-                        };
+                        let retarget = Retarget::new(&t, &body);
                         Posing::Motion(Box::new(t), retarget)
                     }
                     (None, true) if avatar.source_view.is_none() => {
@@ -195,10 +182,7 @@ impl Subject {
     fn at(&self, time: f64, rig: &mut Rig) -> Result<(Cow<'_, GaussianCloud>, Option<Camera>)> {
         let posed = match self {
             Subject::Splats(cloud) => return Ok((Cow::Borrowed(cloud), None)),
-            Subject::Avatar(p) => match &p.body {
-                Body::Default(b) => posed_avatar(&p.avatar, b.as_ref(), &p.posing, time, rig),
-                Body::Ehm(b) => posed_avatar(&p.avatar, b.as_ref(), &p.posing, time, rig),
-            },
+            Subject::Avatar(p) => posed_avatar(&p.avatar, &p.body, &p.posing, time, rig),
         };
         posed.map(|(cloud, camera)| (Cow::Owned(cloud), camera))
     }
