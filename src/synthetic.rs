@@ -6,7 +6,7 @@
 use glam::Vec3;
 use image::{Rgba, RgbaImage};
 
-use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, vertex_normals};
+use crate::body::{BodyModel, BodyPose, PoseError, PosedBody};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
 use crate::photo::SOURCE_SIZE;
 use crate::raster::{Fragments, rasterize};
@@ -205,14 +205,7 @@ impl<'a> Subject<'a> {
         body.pose(pose, &mut posed)?;
         let mut vertices = posed.vertices.clone();
         if !self.clothing.is_empty() {
-            let (mut normals, mut scratch) = (Vec::new(), Vec::new());
-            vertex_normals(
-                &posed.vertices,
-                &body.triangles,
-                Some(&body.weld),
-                &mut scratch,
-                &mut normals,
-            );
+            let normals = body.normals_of(&posed.vertices);
             for ((v, n), d) in vertices.iter_mut().zip(&normals).zip(&self.clothing) {
                 *v += *n * *d;
             }
@@ -338,14 +331,7 @@ fn hair_volume(body: &BodyModel) -> Option<Rigid> {
     let head = body.joint_index("head")?;
     let joints = dominant_joints(body);
     let centre = body.joints[head].rest;
-    let (mut normals, mut scratch) = (Vec::new(), Vec::new());
-    vertex_normals(
-        &body.vertices,
-        &body.triangles,
-        Some(&body.weld),
-        &mut scratch,
-        &mut normals,
-    );
+    let normals = body.normals_of(&body.vertices);
     // How far into the hair a head vertex is: 0 at the hairline, 1 at the crown and the back.
     let depth = |v: usize| -> f32 {
         let p = body.vertices[v] - centre;
@@ -451,14 +437,7 @@ pub fn shaded(
     light: Vec3,
     supersample: usize,
 ) -> Vec<f32> {
-    let (mut scratch, mut normals) = (Vec::new(), Vec::new());
-    vertex_normals(
-        vertices,
-        &body.triangles,
-        Some(&body.weld),
-        &mut scratch,
-        &mut normals,
-    );
+    let normals = body.normals_of(vertices);
     let albedo = |part: Option<&str>| match part {
         Some(p) if p.starts_with("eye_back") => Vec3::new(0.85, 0.83, 0.8),
         Some(p) if p.starts_with("eye_front") => Vec3::new(0.25, 0.17, 0.12),

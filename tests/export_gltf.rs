@@ -229,6 +229,29 @@ fn skinned(file: &File, primitive: &Value, key: usize, morphs: &[Vec3]) -> Vec<V
         .collect()
 }
 
+/// A primitive's morph targets' position deltas, target by target.
+fn morph_targets(file: &File, primitive: &Value) -> Vec<Vec<Vec3>> {
+    primitive["targets"]
+        .as_array()
+        .expect("as written")
+        .iter()
+        .map(|t| {
+            file.floats(&t["POSITION"])
+                .0
+                .chunks_exact(3)
+                .map(Vec3::from_slice)
+                .collect()
+        })
+        .collect()
+}
+
+/// Morph `targets` blended by `weights`: each of `count` points' offset.
+fn blended(targets: &[Vec<Vec3>], weights: &[f32], count: usize) -> Vec<Vec3> {
+    (0..count)
+        .map(|i| targets.iter().zip(weights).map(|(t, &w)| w * t[i]).sum())
+        .collect()
+}
+
 /// The median and the 99th percentile of the distances between `a` and `b`.
 fn percentiles(a: &[Vec3], b: &[Vec3]) -> [f32; 2] {
     let mut d: Vec<f32> = a.iter().zip(b).map(|(p, q)| p.distance(*q)).collect();
@@ -333,18 +356,8 @@ fn the_exported_avatar_animates_in_the_file_as_in_the_viewer() {
         .iter()
         .map(|n| n.as_str().expect("as written"))
         .collect();
-    let targets: Vec<Vec<Vec3>> = body_primitive["targets"]
-        .as_array()
-        .expect("as written")
-        .iter()
-        .map(|t| {
-            file.floats(&t["POSITION"])
-                .0
-                .chunks_exact(3)
-                .map(Vec3::from_slice)
-                .collect()
-        })
-        .collect();
+    let targets = morph_targets(&file, body_primitive);
+    let splat_targets = morph_targets(&file, splat_primitive);
     let retarget = Retarget::new(&motion, &body);
     let times = guava::render::sequence::frame_times(motion.duration(), motion.fps);
     assert_eq!(times.len(), written.frames);
@@ -358,17 +371,11 @@ fn the_exported_avatar_animates_in_the_file_as_in_the_viewer() {
     for key in (0..times.len()).step_by(10) {
         let pose = motion_pose(&avatar, &body, &motion, &retarget, times[key]);
         body.pose(&pose, &mut posed).expect("pose");
-        let morphs: Vec<Vec3> = (0..posed.vertices.len())
-            .map(|v| {
-                names
-                    .iter()
-                    .zip(&targets)
-                    .map(|(name, t)| {
-                        pose.coefficients[body.target_index(name).expect("as written")] * t[v]
-                    })
-                    .sum()
-            })
+        let weights: Vec<f32> = names
+            .iter()
+            .map(|name| pose.coefficients[body.target_index(name).expect("as written")])
             .collect();
+        let morphs = blended(&targets, &weights, posed.vertices.len());
         worst_mesh = worst_mesh.max(max_distance(
             &skinned(&file, body_primitive, key, &morphs),
             &posed.vertices,
@@ -376,29 +383,7 @@ fn the_exported_avatar_animates_in_the_file_as_in_the_viewer() {
         rig.animate(&avatar, &posed, &body, &mut cloud)
             .expect("rig");
         let ours: Vec<Vec3> = cloud.positions.iter().map(|p| Vec3::from(*p)).collect();
-        let splat_targets: Vec<Vec<Vec3>> = splat_primitive["targets"]
-            .as_array()
-            .expect("as written")
-            .iter()
-            .map(|t| {
-                file.floats(&t["POSITION"])
-                    .0
-                    .chunks_exact(3)
-                    .map(Vec3::from_slice)
-                    .collect()
-            })
-            .collect();
-        let splat_morphs: Vec<Vec3> = (0..ours.len())
-            .map(|g| {
-                names
-                    .iter()
-                    .zip(&splat_targets)
-                    .map(|(name, t)| {
-                        pose.coefficients[body.target_index(name).expect("as written")] * t[g]
-                    })
-                    .sum()
-            })
-            .collect();
+        let splat_morphs = blended(&splat_targets, &weights, ours.len());
         let theirs = skinned(&file, splat_primitive, key, &splat_morphs);
         worst_splat = worst_splat.max(max_distance(&theirs, &ours));
         let [median, p99] = percentiles(&theirs, &ours);

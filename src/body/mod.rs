@@ -145,6 +145,20 @@ impl BodyModel {
         self.targets.iter().position(|t| t.name == name)
     }
 
+    /// The smooth normals of this body's mesh at `vertices` (its own, or a posed copy), welded
+    /// across UV seams.
+    pub fn normals_of(&self, vertices: &[Vec3]) -> Vec<Vec3> {
+        let (mut scratch, mut normals) = (Vec::new(), Vec::new());
+        vertex_normals(
+            vertices,
+            &self.triangles,
+            Some(&self.weld),
+            &mut scratch,
+            &mut normals,
+        );
+        normals
+    }
+
     /// Positions of the landmarks on a (posed) copy of this model's vertices.
     pub fn landmark_positions(&self, vertices: &[Vec3]) -> Vec<Vec3> {
         self.landmarks

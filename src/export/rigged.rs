@@ -23,9 +23,7 @@ use serde_json::{Value, json};
 
 use super::glb::{ARRAY_BUFFER, Glb, Kind};
 use crate::avatar::{Avatar, Rig, quat_from_matrix};
-use crate::body::{
-    BodyModel, BodyPose, MAX_INFLUENCES, MorphTarget, PosedBody, TargetGroup, vertex_normals,
-};
+use crate::body::{BodyModel, BodyPose, MAX_INFLUENCES, MorphTarget, PosedBody, TargetGroup};
 use crate::gaussians::GaussianCloud;
 use crate::tracking::{Retarget, Tracking};
 
@@ -155,14 +153,7 @@ pub fn export(
     step(0.1)?;
 
     // The body mesh.
-    let (mut scratch, mut normals) = (Vec::new(), Vec::new());
-    vertex_normals(
-        &bind.vertices,
-        &body.triangles,
-        Some(&body.weld),
-        &mut scratch,
-        &mut normals,
-    );
+    let normals = body.normals_of(&bind.vertices);
     let flat = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
     let position = glb.floats(&flat(&bind.vertices), Kind::Vec3, Some(ARRAY_BUFFER), true);
     let normal = glb.floats(&flat(&normals), Kind::Vec3, Some(ARRAY_BUFFER), false);

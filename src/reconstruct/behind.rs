@@ -10,7 +10,7 @@ use glam::Vec3;
 
 use super::texture::UvTexture;
 use super::uv_map::UvMap;
-use crate::body::{BodyModel, vertex_normals};
+use crate::body::BodyModel;
 
 /// The front image's cell (metres) and the median's half width in cells (±9 cm).
 const CELL: f32 = 0.01;
@@ -26,14 +26,7 @@ const CROWN: f32 = 0.03;
 pub fn behind(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Vec<Option<[f32; 3]>> {
     let n = (uv.size * uv.size) as usize;
     let mut out = vec![None; n];
-    let (mut scratch, mut normals) = (Vec::new(), Vec::new());
-    vertex_normals(
-        &body.vertices,
-        &body.triangles,
-        Some(&body.weld),
-        &mut scratch,
-        &mut normals,
-    );
+    let normals = body.normals_of(&body.vertices);
     let texel = |i: usize| {
         let point = uv.point(i, &body.vertices, &body.triangles);
         let normal = uv.point(i, &normals, &body.triangles);

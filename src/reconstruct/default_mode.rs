@@ -20,7 +20,7 @@ use glam::{Mat2, Mat3A, Vec2, Vec3};
 use super::fill::FilledTexture;
 use super::uv_map::UvMap;
 use crate::avatar::{Avatar, AvatarKind, LocalGaussians, UvGaussians, quat_from_matrix, quat_mul};
-use crate::body::{BodyModel, PosedBody, TriangleFrame, triangle_frames, vertex_normals};
+use crate::body::{BodyModel, PosedBody, TriangleFrame, triangle_frames};
 use crate::photo::bilinear_clamped;
 
 pub const DEFAULT_CHANNELS: usize = 4;
@@ -115,14 +115,7 @@ pub fn build(
     // Template discs lie in the surface's tangent plane (a round blob would stand out past the
     // silhouette by its radius): the frame with the smooth normal as axis 1, relative to the
     // vertex's skinning rotation, which the rig turns it by.
-    let (mut normals, mut scratch) = (Vec::new(), Vec::new());
-    vertex_normals(
-        &posed.vertices,
-        &body.triangles,
-        Some(&body.weld),
-        &mut scratch,
-        &mut normals,
-    );
+    let normals = body.normals_of(&posed.vertices);
     let mut template = LocalGaussians::default();
     for (v, uv_point) in body.uvs.iter().enumerate() {
         let mean_edge = edge_sum[v] / edge_count[v].max(1) as f32;

@@ -15,7 +15,7 @@
 
 use glam::Vec3;
 
-use crate::body::{BodyModel, PosedBody, vertex_normals};
+use crate::body::{BodyModel, PosedBody};
 use crate::camera::Camera;
 use crate::photo::distance::nearest_seeds;
 use crate::raster::rasterize;
@@ -70,14 +70,7 @@ pub fn fit_displacements(
     let prior = group_priors(body, groups, &neighbours, inside);
     let signed = signed_distance(mask, size);
     let mut offsets = vec![0.0f64; groups];
-    let (mut normals, mut scratch) = (Vec::new(), Vec::new());
-    vertex_normals(
-        &posed.vertices,
-        &body.triangles,
-        Some(&body.weld),
-        &mut scratch,
-        &mut normals,
-    );
+    let normals = body.normals_of(&posed.vertices);
     let mut report = DisplacementReport::default();
     for _ in 0..ROUNDS {
         let dressed: Vec<Vec3> = posed
