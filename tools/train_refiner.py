@@ -1,6 +1,6 @@
 """Trains the default refiner and exports it to ONNX (assets/refiner/default_refiner.onnx).
 
-The pairs come from the project itself (`guava refiner-pairs`, guava::refine::pairs): synthetic
+The pairs come from the project itself (`guava refiner-pairs`, guava::eval::pairs): synthetic
 subjects reconstructed in default mode from a front photo, seen from other views and poses. The
 input is the splatting pass's image (RGB, source confidence, alpha, on black); the target is the
 subject drawn antialiased (premultiplied RGB, coverage). The network is a small U-Net that adds a
@@ -162,7 +162,7 @@ def main():
 
     m = onnx.load(args.out)
     recipe = {
-        "pairs": "guava refiner-pairs (guava::refine::pairs): train split, held-out split",
+        "pairs": "guava refiner-pairs (guava::eval::pairs): train split, held-out split",
         "seed": args.seed,
         "steps": step,
         "crop": args.crop,

@@ -215,13 +215,14 @@ pub fn export(
         .iter()
         .map(|&t| json!({"POSITION": splat_morph(&mut glb, &body.targets[t], &anchors, body.vertices.len())}))
         .collect();
-    let splat_mesh = splat_primitive(
+    let mut splat_mesh = splat_primitive(
         &mut glb,
         &cloud,
         &splat_influences,
         splat_morphs,
         targets.len(),
     );
+    splat_mesh["extras"] = json!({"targetNames": target_names});
     step(0.6)?;
 
     let mut json = json!({
