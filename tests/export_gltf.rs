@@ -444,5 +444,46 @@ fn the_exported_avatar_animates_in_the_file_as_in_the_viewer() {
     let error = error / (3 * shown) as f64;
     println!("texture: mean difference {error:.4} from the UV Gaussians' colours");
     assert!(error < 0.03, "{error}");
+
+    // Seen from the photo's camera, the textured mesh against the avatar's own render: each
+    // pixel the body covers and the splats cover opaquely, the texture at the body's UV there
+    // against the splats' colour.
+    let view = avatar.source_view.clone().expect("the photo's view");
+    let mut renderer = crate::common::renderer();
+    let splats = guava::eval::render_view(&mut renderer, &avatar, &body, &view).expect("render");
+    let mut pose = view.pose.clone();
+    avatar.apply_identity(&body, &mut pose);
+    body.pose(&pose, &mut posed).expect("pose");
+    let fragments = guava::raster::rasterize(&posed.vertices, &body.triangles, &view.camera);
+    let (r, g, b) = (splats.plane(0), splats.plane(1), splats.plane(2));
+    let (mut squared, mut count) = (0.0f64, 0usize);
+    for (i, &t) in fragments.triangle.iter().enumerate() {
+        if t < 0 || splats.alpha[i] < 0.99 {
+            continue;
+        }
+        let corners = body.triangles[t as usize];
+        let at: glam::Vec2 = (0..3)
+            .map(|k| fragments.bary[i][k] * body.uvs[corners[k] as usize])
+            .sum();
+        let s = TEXTURE_SIZE as f32;
+        let texel = texture.get_pixel(
+            (at.x * s).min(s - 1.0) as u32,
+            (at.y * s).min(s - 1.0) as u32,
+        );
+        for (k, splat) in [r[i], g[i], b[i]].into_iter().enumerate() {
+            let d = texel[k] as f64 / 255.0 - (splat / splats.alpha[i]).clamp(0.0, 1.0) as f64;
+            squared += d * d;
+        }
+        count += 3;
+    }
+    let psnr = -10.0 * (squared / count as f64).log10();
+    println!(
+        "textured mesh vs splats from the photo's camera: {psnr:.2} dB over {} pixels",
+        count / 3
+    );
+    // Measured 18.9 dB over 53,207 pixels: the mesh lacks the clothing layer (the suit stands up
+    // to 6 cm off the body, so its folds and edges land elsewhere) and what lies beyond the body
+    // (hair, the held helmet), which the splats draw in front of it.
+    assert!(psnr > 16.0, "{psnr}");
     std::fs::remove_dir_all(&dir).ok();
 }
