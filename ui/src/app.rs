@@ -5,7 +5,6 @@
 
 use std::collections::VecDeque;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
@@ -45,13 +44,6 @@ pub struct Options {
     pub demo_avatar: bool,
     /// Drive the body from this video once what was asked to open has opened.
     pub drive: Option<PathBuf>,
-}
-
-/// A new id for something the viewport uploads or re-renders by id (a cloud, an avatar, a body's
-/// topology, a pose): unique for the whole process.
-pub(crate) fn next_id() -> u64 {
-    static NEXT: AtomicU64 = AtomicU64::new(1);
-    NEXT.fetch_add(1, Ordering::Relaxed)
 }
 
 pub(crate) struct Scene {

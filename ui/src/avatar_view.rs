@@ -13,9 +13,9 @@ use guava::photo::{Crop, SOURCE_SIZE, SourceImage};
 use guava::render::view::AvatarRef;
 use guava::tracking::SourceView;
 
-use crate::app::next_id;
 use crate::body_panel::BodyState;
 use crate::fidelity::Fidelity;
+use crate::ids::next_id;
 
 pub struct AvatarState {
     pub avatar: Arc<Avatar>,

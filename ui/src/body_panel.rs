@@ -10,8 +10,8 @@ use guava::body::{BodyPose, Posable, PosedBody, vertex_normals};
 use guava::render::mesh::MeshStyle;
 use guava::render::view::{MeshFrame, PoseRef};
 
-use crate::app::next_id;
 use crate::body_model::SliderGroup;
+use crate::ids::next_id;
 use crate::pose_controls::PoseControls;
 use guava::body::AnyBody;
 

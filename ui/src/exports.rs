@@ -14,7 +14,8 @@ use guava::render::sequence;
 use guava::render::view::{AvatarRef, PoseRef};
 use guava::tracking::{Retarget, Tracking};
 
-use crate::app::{GuavaApp, View, next_id};
+use crate::app::{GuavaApp, View};
+use crate::ids::next_id;
 use crate::jobs::{Job, JobContext, Loaded};
 use crate::offscreen::OffscreenRenderer;
 use crate::orbit::OrbitCamera;

@@ -14,9 +14,10 @@ use guava::render::splatter::max_gaussians;
 use guava::tracking::SourceView;
 use guava::tracking::import::{Imported, open_motion};
 
-use crate::app::{CameraMode, GuavaApp, Networks, Scene, View, next_id};
+use crate::app::{CameraMode, GuavaApp, Networks, Scene, View};
 use crate::avatar_view::AvatarState;
 use crate::body_panel::BodyState;
+use crate::ids::next_id;
 use crate::jobs::{Job, Loaded, LoadedAvatar, PhotoJob};
 use crate::motion::Motion;
 use crate::orbit::OrbitCamera;

@@ -11,6 +11,7 @@ pub mod drive;
 mod exports;
 mod fidelity;
 mod files;
+mod ids;
 mod jobs;
 pub mod motion;
 mod offscreen;
