@@ -421,33 +421,18 @@ fn splat_primitive(
         .collect();
     let opacities: Vec<f32> = cloud.opacities.iter().map(|o| o.clamp(0.0, 1.0)).collect();
     let mut attributes = skin_attributes(glb, influences);
-    let mut add = |name: &str, id: usize| {
+    for (name, data, kind) in [
+        ("POSITION", &positions, Kind::Vec3),
+        ("COLOR_0", &colours, Kind::Vec4),
+        ("KHR_gaussian_splatting:ROTATION", &rotations, Kind::Vec4),
+        ("KHR_gaussian_splatting:SCALE", &scales, Kind::Vec3),
+        ("KHR_gaussian_splatting:OPACITY", &opacities, Kind::Scalar),
+        ("KHR_gaussian_splatting:SH_DEGREE_0_COEF_0", &sh, Kind::Vec3),
+    ] {
+        // Positions carry the bounds glTF requires of them.
+        let id = glb.floats(data, kind, Some(ARRAY_BUFFER), name == "POSITION");
         attributes.insert(name.into(), json!(id));
-    };
-    add(
-        "POSITION",
-        glb.floats(&positions, Kind::Vec3, Some(ARRAY_BUFFER), true),
-    );
-    add(
-        "COLOR_0",
-        glb.floats(&colours, Kind::Vec4, Some(ARRAY_BUFFER), false),
-    );
-    add(
-        "KHR_gaussian_splatting:ROTATION",
-        glb.floats(&rotations, Kind::Vec4, Some(ARRAY_BUFFER), false),
-    );
-    add(
-        "KHR_gaussian_splatting:SCALE",
-        glb.floats(&scales, Kind::Vec3, Some(ARRAY_BUFFER), false),
-    );
-    add(
-        "KHR_gaussian_splatting:OPACITY",
-        glb.floats(&opacities, Kind::Scalar, Some(ARRAY_BUFFER), false),
-    );
-    add(
-        "KHR_gaussian_splatting:SH_DEGREE_0_COEF_0",
-        glb.floats(&sh, Kind::Vec3, Some(ARRAY_BUFFER), false),
-    );
+    }
     json!({
         "name": "avatar splats",
         "primitives": [{

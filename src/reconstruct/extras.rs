@@ -83,6 +83,11 @@ pub fn extras(
         world_from_view * Mat3A::from_cols(Vec3::X.into(), Vec3::Z.into(), (-Vec3::Y).into()),
     );
     let anchors = Anchors::new(body, vertices, posed);
+    // The head's middle depth from the camera, where hair is placed.
+    let middle = camera
+        .view_from_world
+        .transform_point3(anchors.head_middle)
+        .z;
     for (i, &m) in mask.iter().enumerate() {
         if m < PERSON || covered[i] {
             continue;
@@ -98,10 +103,6 @@ pub fn extras(
             continue;
         };
         let hair = v.iter().any(|&k| anchors.head[k as usize]);
-        let middle = camera
-            .view_from_world
-            .transform_point3(anchors.head_middle)
-            .z;
         let (point, (v, w), along) = match hair {
             true => {
                 let deeper = camera.unproject(x, y, middle.max(z));
