@@ -192,3 +192,18 @@ fn gather(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     dst[(c * op.out_h + y) * op.out_w + x] = v;
 }
+
+// A four-channel output ([4, in_h, in_w]: premultiplied RGB and alpha) as one RGBA texel per
+// pixel of the image (out_h × out_w, its top-left corner), for a view to present.
+@group(0) @binding(8) var rgba: texture_storage_2d_array<rgba32float, write>;
+
+@compute @workgroup_size(8, 8, 1)
+fn to_rgba(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= op.out_w || id.y >= op.out_h {
+        return;
+    }
+    let plane = op.in_h * op.in_w;
+    let i = id.y * op.in_w + id.x;
+    let v = vec4<f32>(src[i], src[plane + i], src[2u * plane + i], src[3u * plane + i]);
+    textureStore(rgba, vec2<u32>(id.x, id.y), 0u, v);
+}

@@ -29,4 +29,5 @@ mod splat_vs_reference;
 mod tracking;
 mod tracking_convert;
 mod video_track;
+mod view_refine;
 mod wholebody;

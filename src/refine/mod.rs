@@ -99,6 +99,10 @@ impl RefinerOn {
     }
 }
 
+/// A refiner slot shared by whoever loads it and whoever runs it (a viewer's view, its
+/// workers and exports): empty until loaded.
+pub type SharedRefiner = std::sync::Arc<std::sync::Mutex<Option<Refiner>>>;
+
 /// A loaded refiner network.
 pub struct Refiner {
     engine: Engine,
@@ -312,23 +316,84 @@ impl Refiner {
         &mut self,
         renderer: &crate::render::HeadlessRenderer,
     ) -> Result<SplatImage, RefineError> {
+        let (device, queue) = (&renderer.gpu.device, &renderer.gpu.queue);
         let splatter = &renderer.splatter;
-        let on_device = match (&mut self.engine, self.kind) {
-            (Engine::Wgsl(network), RefinerKind::Default)
-                if network.device() == &renderer.gpu.device =>
-            {
-                splatter
-                    .features()
-                    .zip(splatter.aux())
-                    .map(|t| (network, t))
-            }
-            _ => None,
-        };
-        let Some((network, (features, aux))) = on_device else {
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let Some([width, height]) = self.encode_splat(&mut encoder, device, splatter)? else {
             let image = splatter
-                .read_image(&renderer.gpu.device, &renderer.gpu.queue)
+                .read_image(device, queue)
                 .unwrap_or_else(|| SplatImage::new(1, 1, 0));
             return self.refine(&image);
+        };
+        let Engine::Wgsl(network) = &mut self.engine else {
+            unreachable!("encoded by the WGSL engine");
+        };
+        let (out, c) = network.finish(encoder);
+        let padded = [padded(width), padded(height)];
+        if out.len() != OUTPUT_CHANNELS * padded[0] * padded[1] {
+            return Err(RefineError::Model {
+                path: self.path.clone(),
+                problem: format!(
+                    "gives [1, {c}, ..] for a {}×{} input, not [1, {OUTPUT_CHANNELS}, {}, {}]",
+                    padded[0], padded[1], padded[1], padded[0]
+                ),
+            });
+        }
+        let mut refined = unpad_default(&out, width, height);
+        if let Some([_, inv_depth]) = splatter.read_aux(device, queue) {
+            refined.inv_depth = inv_depth;
+        }
+        Ok(refined)
+    }
+
+    /// Records the refiner on `splatter`'s output into `encoder`, its premultiplied RGB and
+    /// alpha written into `target` (rgba32float, the image's size) — where it runs on `device`
+    /// as our WGSL passes reading the splat layers where they lie (a default refiner): a pass on
+    /// a view's frame. `Ok(false)` where it does not: refine a readback of the image then.
+    pub fn encode_into(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        device: &wgpu::Device,
+        splatter: &crate::render::Splatter,
+        target: &wgpu::Texture,
+    ) -> Result<bool, RefineError> {
+        if self.encode_splat(encoder, device, splatter)?.is_none() {
+            return Ok(false);
+        }
+        let Engine::Wgsl(network) = &self.engine else {
+            unreachable!("encoded by the WGSL engine");
+        };
+        network
+            .encode_rgba(encoder, target)
+            .map_err(|problem| RefineError::Model {
+                path: self.path.clone(),
+                problem,
+            })?;
+        Ok(true)
+    }
+
+    /// Whether this refiner runs on `device` as our WGSL passes reading a default-mode splat
+    /// where it lies ([`Self::encode_into`]).
+    pub fn runs_on(&self, device: &wgpu::Device) -> bool {
+        matches!((&self.engine, self.kind),
+            (Engine::Wgsl(network), RefinerKind::Default) if network.device() == device)
+    }
+
+    /// Records the network on `splatter`'s output where [`Self::runs_on`] its device; returns
+    /// the image's size then, `None` otherwise.
+    fn encode_splat(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        device: &wgpu::Device,
+        splatter: &crate::render::Splatter,
+    ) -> Result<Option<[u32; 2]>, RefineError> {
+        if !self.runs_on(device) {
+            return Ok(None);
+        }
+        let (Engine::Wgsl(network), Some(features), Some(aux)) =
+            (&mut self.engine, splatter.features(), splatter.aux())
+        else {
+            return Ok(None);
         };
         let channels = splatter.channels().unwrap_or(0) as usize;
         if channels < 4 {
@@ -342,24 +407,13 @@ impl Refiner {
         let layers = [0, 1, 2, 3].map(wgsl::Layer::Feature);
         let layers = [&layers[..], &[wgsl::Layer::Alpha]].concat();
         let padded = [padded(width) as u32, padded(height) as u32];
-        let problem = |problem: String| RefineError::Model {
-            path: self.path.clone(),
-            problem,
-        };
-        let (out, c) = network
-            .run_splat(features, aux, &layers, [width, height], padded)
-            .map_err(problem)?;
-        if out.len() != OUTPUT_CHANNELS * (padded[0] * padded[1]) as usize {
-            return Err(problem(format!(
-                "gives [1, {c}, ..] for a {}×{} input, not [1, {OUTPUT_CHANNELS}, {}, {}]",
-                padded[0], padded[1], padded[1], padded[0]
-            )));
-        }
-        let mut refined = unpad_default(&out, width, height);
-        if let Some([_, inv_depth]) = splatter.read_aux(&renderer.gpu.device, &renderer.gpu.queue) {
-            refined.inv_depth = inv_depth;
-        }
-        Ok(refined)
+        network
+            .encode_splat(encoder, features, aux, &layers, [width, height], padded)
+            .map_err(|problem| RefineError::Model {
+                path: self.path.clone(),
+                problem,
+            })?;
+        Ok(Some([width, height]))
     }
 
     /// `image` (rendered on black) refined: RGB premultiplied and alpha; its depth is kept.

@@ -115,6 +115,7 @@ struct Pipelines {
     unary: (wgpu::ComputePipeline, wgpu::BindGroupLayout),
     add: (wgpu::ComputePipeline, wgpu::BindGroupLayout),
     gather: (wgpu::ComputePipeline, wgpu::BindGroupLayout),
+    rgba: (wgpu::ComputePipeline, wgpu::BindGroupLayout),
 }
 
 impl Pipelines {
@@ -146,6 +147,20 @@ impl Pipelines {
                     InputTexture,
                     InputTexture,
                     read,
+                ],
+            ),
+            rgba: make(
+                "to_rgba",
+                &[
+                    Uniform,
+                    read,
+                    Binding::Skip,
+                    Binding::Skip,
+                    Binding::Skip,
+                    Binding::Skip,
+                    Binding::Skip,
+                    Binding::Skip,
+                    Binding::OutputTexture(wgpu::TextureFormat::Rgba32Float),
                 ],
             ),
         }
@@ -269,6 +284,22 @@ impl WgslNetwork {
         size: [u32; 2],
         padded: [u32; 2],
     ) -> Result<(Vec<f32>, u32), String> {
+        let mut encoder = self.encoder();
+        self.encode_splat(&mut encoder, features, aux, layers, size, padded)?;
+        Ok(self.finish(encoder))
+    }
+
+    /// Records [`Self::run_splat`]'s work into `encoder`, leaving the output on the device
+    /// ([`Self::encode_rgba`] writes it into a texture).
+    pub fn encode_splat(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        features: &wgpu::Texture,
+        aux: &wgpu::Texture,
+        layers: &[Layer],
+        size: [u32; 2],
+        padded: [u32; 2],
+    ) -> Result<(), String> {
         if layers.len() != self.input_channels as usize {
             return Err(format!(
                 "the network reads {} channels, {} were given",
@@ -314,7 +345,6 @@ impl WgslNetwork {
                 entry(7, codes.as_entire_binding()),
             ],
         });
-        let mut encoder = self.encoder();
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(pipeline);
@@ -325,8 +355,55 @@ impl WgslNetwork {
                 self.input_channels,
             );
         }
-        self.encode(&mut encoder);
-        Ok(self.finish(encoder))
+        self.encode(encoder);
+        Ok(())
+    }
+
+    /// Records the copy of a four-channel output (the default refiner's premultiplied RGB and
+    /// alpha, [4, padded H, padded W]) into `target`, an rgba32float 2D array of the image's
+    /// size: what a view presents.
+    pub fn encode_rgba(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::Texture,
+    ) -> Result<(), String> {
+        let plan = self.plan.as_ref().ok_or("nothing was run")?;
+        let [c, h, w] = plan.shapes[self.output];
+        let size = target.size();
+        if c != 4 || size.width > w || size.height > h {
+            return Err(format!(
+                "gives [{c}, {h}, {w}]; a {}×{} RGBA picture needs four channels at least that \
+                 large",
+                size.width, size.height
+            ));
+        }
+        let device = &self.gpu.device;
+        let params = OpParams {
+            in_c: c,
+            in_h: h,
+            in_w: w,
+            out_c: 4,
+            out_h: size.height,
+            out_w: size.width,
+            ..Default::default()
+        };
+        let uniform = uniform(device, &params);
+        let view = crate::render::splatter::array_view(target);
+        let (pipeline, layout) = &self.pipelines.rgba;
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("refine::rgba"),
+            layout,
+            entries: &[
+                entry(0, uniform.as_entire_binding()),
+                entry(1, plan.buffers[self.output].as_entire_binding()),
+                entry(8, wgpu::BindingResource::TextureView(&view)),
+            ],
+        });
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups(size.width.div_ceil(8), size.height.div_ceil(8), 1);
+        Ok(())
     }
 
     /// The device it runs on.
@@ -365,8 +442,8 @@ impl WgslNetwork {
         }
     }
 
-    /// Submits and reads the output back.
-    fn finish(&self, encoder: wgpu::CommandEncoder) -> (Vec<f32>, u32) {
+    /// Submits `encoder` and reads the output back: ([C, H, W], its C).
+    pub fn finish(&self, encoder: wgpu::CommandEncoder) -> (Vec<f32>, u32) {
         let plan = self.plan.as_ref().expect("planned");
         self.gpu.queue.submit([encoder.finish()]);
         let [c, h, w] = plan.shapes[self.output];

@@ -18,7 +18,7 @@ pub mod view;
 
 pub use layout::GpuGaussian;
 pub use pipelines::{FeatureStorage, RasterTuning, SplatPipelines};
-pub use readback::wait;
+pub use readback::{read_texture_bytes, wait};
 pub use rig::GpuAvatar;
 pub use splatter::{Splatter, Stage};
 pub use timing::StageTimer;
@@ -197,6 +197,11 @@ impl HeadlessRenderer {
 
     pub fn with_options(gpu: GpuContext, tuning: RasterTuning, storage: FeatureStorage) -> Self {
         let pipelines = Arc::new(SplatPipelines::with_storage(&gpu.device, tuning, storage));
+        Self::with_pipelines(gpu, pipelines)
+    }
+
+    /// Sharing `pipelines`, built for `gpu`'s device, with the other renderers on it.
+    pub fn with_pipelines(gpu: GpuContext, pipelines: Arc<SplatPipelines>) -> Self {
         let splatter = Splatter::new(&gpu.device, pipelines.clone());
         Self {
             gpu,

@@ -1,5 +1,6 @@
-//! Host side of shaders/present.wgsl: draws a [`Splatter`]'s output into a render pass, reading its
-//! storage buffers directly. Used by the viewer's paint callback.
+//! Host side of shaders/present.wgsl: draws a [`Splatter`]'s output (rendered on black) over a
+//! background into a render pass, reading its textures directly; or a refined picture the same
+//! way. Used by the viewer's paint callback.
 
 use super::Splatter;
 use super::shader;
@@ -24,8 +25,13 @@ pub struct PresentUniform {
     pub rgb_channels: [u32; 4],
     pub inv_depth_range: [f32; 2],
     pub _pad: [f32; 2],
+    /// What the picture is composited over (the displayed channels' background), by its alpha.
+    pub background: [f32; 4],
 }
-const _: () = assert!(size_of::<PresentUniform>() == 48);
+const _: () = assert!(size_of::<PresentUniform>() == 64);
+
+/// The shader's mode for a refined picture (premultiplied RGB and alpha in one texel).
+const MODE_REFINED: u32 = 3;
 
 pub struct PresentPass {
     pipeline: wgpu::RenderPipeline,
@@ -101,7 +107,9 @@ impl PresentPass {
         mode: PresentMode,
         rgb_channels: [u32; 3],
         inv_depth_range: [f32; 2],
+        background: [f32; 3],
     ) -> PresentUniform {
+        let [r, g, b] = background;
         PresentUniform {
             size,
             mode: mode as u32,
@@ -109,7 +117,33 @@ impl PresentPass {
             rgb_channels: [rgb_channels[0], rgb_channels[1], rgb_channels[2], 0],
             inv_depth_range,
             _pad: [0.0; 2],
+            background: [r, g, b, 0.0],
         }
+    }
+
+    /// For a refined picture of `size` ([`Self::bind_refined`]) over `background`.
+    pub fn refined_uniform(&self, size: [u32; 2], background: [f32; 3]) -> PresentUniform {
+        PresentUniform {
+            mode: MODE_REFINED,
+            ..self.uniform(size, PresentMode::Rgb, [0, 1, 2], [0.0, 1.0], background)
+        }
+    }
+
+    /// Binds a refined picture: `refined` (rgba32float, one layer) with the splat's alpha and
+    /// depth beside it.
+    pub fn bind_refined(
+        &self,
+        device: &wgpu::Device,
+        uniform: &wgpu::Buffer,
+        refined: &wgpu::Texture,
+        splatter: &Splatter,
+    ) -> Option<wgpu::BindGroup> {
+        Some(self.bind_views(
+            device,
+            uniform,
+            &array_view(refined),
+            &array_view(splatter.aux()?),
+        ))
     }
 
     /// Binds the splatter's current output; rebuild when the splatter reallocates.
@@ -123,7 +157,17 @@ impl PresentPass {
             array_view(splatter.features()?),
             array_view(splatter.aux()?),
         );
-        Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
+        Some(self.bind_views(device, uniform, &features, &aux))
+    }
+
+    fn bind_views(
+        &self,
+        device: &wgpu::Device,
+        uniform: &wgpu::Buffer,
+        features: &wgpu::TextureView,
+        aux: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("Present"),
             layout: &self.layout,
             entries: &[
@@ -133,14 +177,14 @@ impl PresentPass {
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&features),
+                    resource: wgpu::BindingResource::TextureView(features),
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&aux),
+                    resource: wgpu::BindingResource::TextureView(aux),
                 },
             ],
-        }))
+        })
     }
 
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, bind_group: &wgpu::BindGroup) {

@@ -69,52 +69,90 @@ pub fn read_texture_bytes(
     queue: &wgpu::Queue,
     texture: &wgpu::Texture,
 ) -> Vec<u8> {
-    let size = texture.size();
-    let (w, h, layers) = (
-        size.width as usize,
-        size.height as usize,
-        size.depth_or_array_layers as usize,
-    );
-    let texel = texture
-        .format()
-        .block_copy_size(None)
-        .expect("a colour format") as usize;
-    let row = w * texel;
-    let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
-    let staging = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback::texture"),
-        size: (padded * h * layers) as u64,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
         label: Some("readback::texture"),
     });
-    encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &staging,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded as u32),
-                rows_per_image: Some(h as u32),
-            },
-        },
-        size,
-    );
+    let copy = TextureCopy::encode(device, &mut encoder, texture);
     queue.submit([encoder.finish()]);
-    staging.slice(..).map_async(wgpu::MapMode::Read, |r| {
-        if let Err(e) = r {
-            log::error!("texture readback map failed: {e}");
-        }
-    });
+    copy.map();
     wait(device);
-    let mut out = Vec::with_capacity(row * h * layers);
-    if let Ok(view) = staging.slice(..).get_mapped_range() {
-        for chunk in view.chunks_exact(padded) {
-            out.extend_from_slice(&chunk[..row]);
+    copy.bytes()
+}
+
+/// A texture's texels copied into a staging buffer by a command encoder, to be read once that
+/// work is submitted: blocking ([`read_texture_bytes`]) or from a worker thread while the frame
+/// loop goes on (the viewer's refiner on the CPU).
+pub struct TextureCopy {
+    staging: wgpu::Buffer,
+    /// Bytes of one row of texels, and of one row in the staging buffer.
+    row: usize,
+    padded: usize,
+}
+
+impl TextureCopy {
+    /// Records the copy of every layer of `texture`.
+    pub fn encode(
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        texture: &wgpu::Texture,
+    ) -> Self {
+        let size = texture.size();
+        let (w, h, layers) = (
+            size.width as usize,
+            size.height as usize,
+            size.depth_or_array_layers as usize,
+        );
+        let texel = texture
+            .format()
+            .block_copy_size(None)
+            .expect("a colour format") as usize;
+        let row = w * texel;
+        let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback::texture"),
+            size: (padded * h * layers) as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        encoder.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &staging,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded as u32),
+                    rows_per_image: Some(h as u32),
+                },
+            },
+            size,
+        );
+        Self {
+            staging,
+            row,
+            padded,
         }
     }
-    staging.unmap();
-    out
+
+    /// Asks for the staging buffer once the copy's submission is done (submit it first); the
+    /// bytes are there after the device is polled past it ([`wait`]).
+    pub fn map(&self) {
+        self.staging.slice(..).map_async(wgpu::MapMode::Read, |r| {
+            if let Err(e) = r {
+                log::error!("texture readback map failed: {e}");
+            }
+        });
+    }
+
+    /// The texels, unpadded (empty if the buffer could not be mapped).
+    pub fn bytes(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        if let Ok(view) = self.staging.slice(..).get_mapped_range() {
+            out.reserve(view.len() / self.padded * self.row);
+            for chunk in view.chunks_exact(self.padded) {
+                out.extend_from_slice(&chunk[..self.row]);
+            }
+        }
+        self.staging.unmap();
+        out
+    }
 }

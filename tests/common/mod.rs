@@ -10,7 +10,7 @@ pub fn renderer() -> HeadlessRenderer {
     HeadlessRenderer::new(gpu())
 }
 
-fn gpu() -> GpuContext {
+pub fn gpu() -> GpuContext {
     GpuContext::headless()
         .expect("a Vulkan adapter (lavapipe: apt-get install mesa-vulkan-drivers)")
 }

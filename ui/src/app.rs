@@ -93,7 +93,10 @@ pub(crate) struct Gpu {
     pub adapter: String,
     pub limits: wgpu::Limits,
     pub cpu: bool,
-    /// The same device for rendering off screen on a worker (an avatar against its photo).
+    /// The device (egui's), for loading the refiner onto it.
+    pub context: Option<guava::gpu::GpuContext>,
+    /// The same device and splatting pipelines for rendering off screen on a worker (exports,
+    /// an avatar against its photo).
     pub offscreen: Option<Arc<Mutex<OffscreenRenderer>>>,
 }
 
@@ -172,20 +175,26 @@ impl GuavaApp {
             Some(rs) => {
                 let info = rs.adapter.get_info();
                 let view = ViewRenderer::new(&rs.device, &rs.queue, &info, rs.target_format);
+                let pipelines = view.pipelines();
                 rs.renderer.write().callback_resources.insert(view);
                 crate::recovery::watch(&rs.device);
+                // One context for the device: egui's, shared by the view, the refiner and the
+                // off-screen renderer (which shares the view's pipelines too).
+                let context = guava::gpu::GpuContext {
+                    adapter: rs.adapter.clone(),
+                    device: rs.device.clone(),
+                    queue: rs.queue.clone(),
+                };
                 Gpu {
                     ready: true,
                     adapter: guava::gpu::adapter_label(&info),
                     limits: rs.device.limits(),
                     cpu: info.device_type == wgpu::DeviceType::Cpu,
                     offscreen: Some(Arc::new(Mutex::new(OffscreenRenderer::new(
-                        guava::gpu::GpuContext {
-                            adapter: rs.adapter.clone(),
-                            device: rs.device.clone(),
-                            queue: rs.queue.clone(),
-                        },
+                        context.clone(),
+                        pipelines,
                     )))),
+                    context: Some(context),
                 }
             }
             None => Gpu {
@@ -193,6 +202,7 @@ impl GuavaApp {
                 adapter: "no wgpu device".into(),
                 limits: wgpu::Limits::default(),
                 cpu: false,
+                context: None,
                 offscreen: None,
             },
         };
@@ -360,7 +370,7 @@ impl GuavaApp {
     /// What the viewport last reported: counters, renders, the size it drew at.
     /// Refined frames shown so far (the refiner pass runs once the view settles).
     pub fn refined_frames(&self) -> u64 {
-        self.refined.frames
+        self.report().refine.frames
     }
 
     /// Where the refiner runs.
@@ -369,11 +379,8 @@ impl GuavaApp {
     }
 
     /// Where the last refined frame was refined (`Refiner::engine_name`).
-    pub fn refined_engine(&self) -> Option<&str> {
-        self.refined
-            .last_ms
-            .as_ref()
-            .map(|(_, engine)| engine.as_str())
+    pub fn refined_engine(&self) -> Option<String> {
+        self.report().refine.engine
     }
 
     /// Refines while the user drags or plays too (the latest refined frame stays on screen).
@@ -457,8 +464,8 @@ impl GuavaApp {
         ) && opened.elapsed().as_secs_f32() >= secs
         {
             // Fault injection: the device destroyed as a driver reset would.
-            let mut offscreen = offscreen.lock().unwrap_or_else(|e| e.into_inner());
-            offscreen.renderer().gpu.device.destroy();
+            let offscreen = offscreen.lock().unwrap_or_else(|e| e.into_inner());
+            offscreen.renderer.gpu.device.destroy();
             self.options.lose_device_after = None;
         }
         let Some(secs) = self.options.exit_after_secs else {
@@ -505,15 +512,19 @@ impl GuavaApp {
 
     /// Takes what the viewport reported: a GPU error once, a request for another frame.
     fn take_view_report(&mut self, ctx: &egui::Context) {
-        let (redraw, gpu_error) = {
+        let (redraw, gpu_error, refine_error) = {
             let mut report = self.report.lock().unwrap_or_else(|e| e.into_inner());
             (
                 std::mem::take(&mut report.needs_redraw),
                 report.error.take(),
+                report.refine.error.take(),
             )
         };
         if let Some(e) = gpu_error {
             self.error(e);
+        }
+        if let Some(e) = refine_error {
+            self.refined.failed(e);
         }
         if redraw {
             ctx.request_repaint();

@@ -9,9 +9,8 @@ use std::sync::{Arc, Mutex};
 use guava::body::{BodyPose, Posable, PosedBody};
 use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
-use guava::refine::{Refiner, RefinerOn};
 use guava::render::sequence;
-use guava::render::view::{AvatarRef, PoseRef};
+use guava::render::view::{AvatarRef, PoseRef, RefineWith};
 use guava::tracking::{Retarget, Tracking};
 
 use crate::app::{GuavaApp, View};
@@ -66,22 +65,18 @@ struct Shot {
     avatar: AvatarRef,
     outside: bool,
     background: [f32; 3],
-    /// The avatar's refiner and where it runs, when the view refines.
-    refiner: Option<(PathBuf, RefinerOn)>,
+    /// The avatar's refiner, when the view refines: the view's, loaded here unless the view
+    /// has already.
+    refiner: Option<RefineWith>,
 }
 
 impl Shot {
-    fn draw(
-        &self,
-        refiner: &mut Option<Refiner>,
-        pose: &PoseRef,
-        camera: &Camera,
-    ) -> Result<image::RgbImage, String> {
+    fn draw(&self, pose: &PoseRef, camera: &Camera) -> Result<image::RgbImage, String> {
         let mut offscreen = self.offscreen.lock().unwrap_or_else(|e| e.into_inner());
         let image = match &self.refiner {
-            Some((path, on)) => offscreen.refine_avatar(
-                refiner,
-                (path, *on),
+            Some(with) => offscreen.refine_avatar(
+                &mut with.refiner.lock().unwrap_or_else(|e| e.into_inner()),
+                (&with.path, with.on),
                 &self.avatar,
                 pose,
                 self.outside,
@@ -92,6 +87,14 @@ impl Shot {
                 .map_err(|e| e.to_string())?,
         };
         Ok(image.over(self.background))
+    }
+}
+
+impl Drop for Shot {
+    /// The export is over: its copy of the avatar leaves the GPU.
+    fn drop(&mut self) {
+        let mut offscreen = self.offscreen.lock().unwrap_or_else(|e| e.into_inner());
+        offscreen.release();
     }
 }
 
@@ -141,7 +144,12 @@ impl GuavaApp {
                 guava::refine::refiner_for(avatar.avatar.kind, networks).ok()
             })
             .flatten()
-            .map(|path| (path, self.refined.on));
+            .map(|path| RefineWith {
+                refiner: self.refined.refiner.clone(),
+                path,
+                on: self.refined.on,
+                behind: false,
+            });
         Ok(Shot {
             offscreen,
             avatar: avatar.reference(body),
@@ -178,7 +186,7 @@ impl GuavaApp {
         let pose = self.body.as_mut().expect("shot checked").posed();
         self.start_export(&out.clone(), move |context| {
             context.set_stage(format!("drawing {w}×{h}"));
-            let image = shot.draw(&mut None, &pose, &camera)?;
+            let image = shot.draw(&pose, &camera)?;
             guava::render::save_png(&image, &out).map_err(|e| format!("{e:#}"))?;
             Ok(format!("wrote {} ({w}×{h})", out.display()))
         });
@@ -218,7 +226,6 @@ impl GuavaApp {
         self.start_export(&dir.clone(), move |context| {
             std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
             let n = times.len();
-            let mut refiner = None;
             let mut written = Vec::with_capacity(n);
             for (i, &time) in times.iter().enumerate() {
                 if context.cancelled() {
@@ -242,7 +249,7 @@ impl GuavaApp {
                         .ok_or("the motion has no camera at this time")?,
                     CameraPath::Keys => keys.at(time).ok_or("no camera keys")?.camera(w, h),
                 };
-                let image = shot.draw(&mut refiner, &posing.at(time)?, &camera)?;
+                let image = shot.draw(&posing.at(time)?, &camera)?;
                 let file = sequence::frame_path(&dir, i);
                 guava::render::save_png(&image, &file).map_err(|e| format!("{e:#}"))?;
                 written.push(file);

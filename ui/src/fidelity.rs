@@ -19,7 +19,7 @@ pub fn measure(
     view: &SourceView,
     photo: &SourceImage,
 ) -> Result<Fidelity, EvalError> {
-    let renderer = offscreen.renderer();
+    let renderer = &mut offscreen.renderer;
     let (metrics, rendered) = guava::eval::evaluate(renderer, avatar, body, Some(view), photo)?;
     let strip = guava::eval::side_by_side(photo, &rendered);
     let size = [strip.width() as usize, strip.height() as usize];

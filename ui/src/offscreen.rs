@@ -1,35 +1,28 @@
-//! The viewer's own device, for rendering off screen on a worker thread: an avatar against its
-//! photo, and the refined view. The splatting pipelines are built on first use (on the worker
-//! that needs them, not while the window opens); one job holds it at a time.
+//! Rendering off screen on a worker thread, on the viewer's device with the view's splatting
+//! pipelines: exports (the avatar as on screen, at any size) and an avatar against its photo.
+//! One job holds it at a time.
 
 use std::path::Path;
+use std::sync::Arc;
 
 use guava::gpu::GpuContext;
 use guava::refine::{Refiner, RefinerOn};
 use guava::render::view::{AvatarRef, PoseRef};
-use guava::render::{AvatarRenderError, GpuAvatar, HeadlessRenderer, SplatImage};
+use guava::render::{AvatarRenderError, GpuAvatar, HeadlessRenderer, SplatImage, SplatPipelines};
 
 pub struct OffscreenRenderer {
-    gpu: Option<GpuContext>,
-    renderer: Option<HeadlessRenderer>,
-    /// The last avatar drawn, kept on the GPU (by its viewer id).
+    pub renderer: HeadlessRenderer,
+    /// The avatar an export is drawing, kept on the GPU between its frames (by its viewer id)
+    /// and let go when the export ends ([`Self::release`]).
     avatar: Option<(u64, GpuAvatar)>,
 }
 
 impl OffscreenRenderer {
-    pub fn new(gpu: GpuContext) -> Self {
+    pub fn new(gpu: GpuContext, pipelines: Arc<SplatPipelines>) -> Self {
         Self {
-            gpu: Some(gpu),
-            renderer: None,
+            renderer: HeadlessRenderer::with_pipelines(gpu, pipelines),
             avatar: None,
         }
-    }
-
-    pub fn renderer(&mut self) -> &mut HeadlessRenderer {
-        if let Some(gpu) = self.gpu.take() {
-            self.renderer = Some(HeadlessRenderer::new(gpu));
-        }
-        self.renderer.as_mut().expect("built above")
     }
 
     /// `avatar` posed as `pose`, seen by `camera`, on black (`outside`: with the parts its photo
@@ -42,7 +35,7 @@ impl OffscreenRenderer {
         camera: &guava::camera::Camera,
     ) -> Result<SplatImage, AvatarRenderError> {
         self.draw_avatar(avatar, pose, outside, camera)?;
-        let renderer = self.renderer();
+        let renderer = &self.renderer;
         let (device, queue) = (&renderer.gpu.device, &renderer.gpu.queue);
         Ok(renderer
             .splatter
@@ -65,15 +58,20 @@ impl OffscreenRenderer {
             .as_ref()
             .is_none_or(|r| r.path != path || r.on != on)
         {
-            let gpu = &self.renderer().gpu;
+            let gpu = &self.renderer.gpu;
             *refiner = Some(Refiner::load_on(on, gpu, path).map_err(|e| e.to_string())?);
         }
         self.draw_avatar(avatar, pose, outside, camera)
             .map_err(|e| e.to_string())?;
         let refiner = refiner.as_mut().expect("loaded above");
         refiner
-            .refine_drawn(self.renderer())
+            .refine_drawn(&self.renderer)
             .map_err(|e| e.to_string())
+    }
+
+    /// Lets go of the avatar an export drew (its copy on the GPU).
+    pub fn release(&mut self) {
+        self.avatar = None;
     }
 
     /// Draws, leaving the image on the GPU.
@@ -84,12 +82,9 @@ impl OffscreenRenderer {
         outside: bool,
         camera: &guava::camera::Camera,
     ) -> Result<(), AvatarRenderError> {
-        self.renderer();
-        let (Some(renderer), cached) = (&mut self.renderer, &mut self.avatar) else {
-            unreachable!("built above");
-        };
+        let renderer = &mut self.renderer;
         let (device, queue) = (&renderer.gpu.device, &renderer.gpu.queue);
-        if cached.as_ref().is_none_or(|(id, _)| *id != avatar.id) {
+        if self.avatar.as_ref().is_none_or(|(id, _)| *id != avatar.id) {
             let gpu = GpuAvatar::new(
                 device,
                 renderer.pipelines.clone(),
@@ -97,9 +92,9 @@ impl OffscreenRenderer {
                 &avatar.triangles,
                 avatar.weld.as_deref().map(Vec::as_slice),
             );
-            *cached = Some((avatar.id, gpu));
+            self.avatar = Some((avatar.id, gpu));
         }
-        let (_, gpu) = cached.as_mut().expect("made above");
+        let (_, gpu) = self.avatar.as_mut().expect("made above");
         gpu.show_outside(queue, outside);
         let background = vec![0.0; avatar.avatar.channels];
         renderer.draw_avatar(gpu, &pose.posed, camera, &background)?;

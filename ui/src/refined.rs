@@ -1,67 +1,39 @@
-//! The refiner pass in the viewer: once the view settles (no drag, no playback), the avatar is
-//! drawn again off screen at the viewport's size, refined by its refiner (the default one, or
-//! GUAVA's for GUAVA-mode avatars; on a worker thread, by ONNX Runtime on the CPU or our WGSL
-//! passes on the viewer's device, `RefinerOn`) and drawn over the raw splat image until
-//! anything changes.
-//! While the user drags or plays the raw splat is shown: the refiner is left out of those frames
-//! — unless refining *while interacting* too, when the latest refined frame stays on screen
-//! (behind the input by the refiner's time) and the next is made as soon as the worker is free.
+//! The refiner pass in the viewer: the user's switches, and the refiner itself, loaded on a
+//! worker (the default one, or GUAVA's for GUAVA-mode avatars; run by ONNX Runtime on the CPU
+//! or our WGSL passes on the viewer's device, `RefinerOn`). The view renderer refines the frame
+//! on screen with it ([`RefineWith`]) once the view settles (no drag, no playback) and presents
+//! the refined picture until anything changes; while the user drags or plays the raw splat is
+//! shown — unless refining *while interacting* too, when the latest refined picture stays on
+//! screen (behind the input by the refiner's time) until the next is ready. Exports refine with
+//! the same loaded refiner.
 
+use guava::gpu::GpuContext;
+use guava::refine::{Refiner, RefinerOn, SharedRefiner};
+use guava::render::view::RefineWith;
+use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, TryRecvError};
-use std::sync::{Arc, Mutex};
-use std::time::Instant;
-
-use guava::camera::Camera;
-use guava::refine::{Refiner, RefinerOn};
-use guava::render::view::{AvatarRef, PoseRef};
-
-use crate::offscreen::OffscreenRenderer;
-
-/// What a refined frame shows: it is current while all of this is unchanged.
-#[derive(Clone, PartialEq)]
-pub struct RefineKey {
-    /// The refiner model's file.
-    pub refiner: std::path::PathBuf,
-    /// Where it runs.
-    pub on: RefinerOn,
-    pub avatar: u64,
-    pub pose: u64,
-    pub camera: Camera,
-    pub background: [f32; 3],
-    pub outside: bool,
-}
-
-/// A refined frame, composited over the background, as 8-bit sRGB.
-struct Refined {
-    image: egui::ColorImage,
-    /// Time to draw, refine and read it back.
-    millis: f32,
-    /// Where it ran (`Refiner::engine_name`).
-    engine: String,
-}
 
 pub struct RefinedView {
     /// Whether the refiner runs when the view settles (the user's switch).
     pub enabled: bool,
-    /// Whether it also runs while the user drags or plays, showing its latest frame meanwhile.
+    /// Whether it also runs while the user drags or plays, showing its latest picture meanwhile.
     pub while_interacting: bool,
     /// Where it runs (the user's choice).
     pub on: RefinerOn,
-    refiner: Arc<Mutex<Option<Refiner>>>,
-    pending: Option<(RefineKey, Receiver<Result<Refined, String>>)>,
-    shown: Option<(RefineKey, egui::TextureHandle)>,
-    /// The last refined frame's cost and where it ran, and the last error (shown in the
-    /// display panel).
-    pub last_ms: Option<(f32, String)>,
+    /// The loaded refiner, shared with the view renderer, its workers and exports.
+    pub refiner: SharedRefiner,
+    loading: Option<Loading>,
+    /// The last error (shown in the display panel; refining is switched off by it).
     pub error: Option<String>,
     /// Why the avatar on screen has no refiner to run (shown in the display panel).
     pub unavailable: Option<String>,
-    /// Refined frames shown so far.
-    pub frames: u64,
-    /// Whether the frame on screen is the refined one, and whether it is behind the view (an
-    /// earlier frame's, while interacting).
-    pub showing: bool,
-    pub behind: bool,
+}
+
+/// A refiner being loaded on a worker: which, and the outcome.
+struct Loading {
+    path: PathBuf,
+    on: RefinerOn,
+    outcome: Receiver<Result<(), String>>,
 }
 
 impl Default for RefinedView {
@@ -70,114 +42,85 @@ impl Default for RefinedView {
             enabled: true,
             while_interacting: false,
             on: RefinerOn::Auto,
-            refiner: Arc::default(),
-            pending: None,
-            shown: None,
-            last_ms: None,
+            refiner: SharedRefiner::default(),
+            loading: None,
             error: None,
             unavailable: None,
-            frames: 0,
-            showing: false,
-            behind: false,
         }
     }
 }
 
 impl RefinedView {
-    /// The refined frame for `key` if it is ready; otherwise starts making it (one at a time) and
-    /// returns `None`, so the caller draws the raw splat image meanwhile — or, with `behind`, the
-    /// latest refined frame of an earlier key (interacting: the view moves on faster than the
-    /// refiner).
-    pub fn frame(
+    /// What the view refines with for the refiner at `path`: loads it first on a worker (the
+    /// view shows the raw splat meanwhile). `behind`: the user interacts, show the latest
+    /// refined picture until the next is made.
+    pub fn with(
         &mut self,
         ctx: &egui::Context,
-        key: RefineKey,
-        offscreen: &Arc<Mutex<OffscreenRenderer>>,
-        avatar: &AvatarRef,
-        pose: &PoseRef,
+        gpu: &GpuContext,
+        path: &Path,
         behind: bool,
-    ) -> Option<egui::TextureId> {
-        self.behind = false;
-        if let Some((k, texture)) = &self.shown
-            && *k == key
-        {
-            return Some(texture.id());
-        }
-        let latest = |view: &mut Self| {
-            view.behind = behind && view.shown.is_some();
-            view.shown.as_ref().filter(|_| behind).map(|(_, t)| t.id())
-        };
-        if let Some((k, rx)) = &self.pending {
-            match rx.try_recv() {
-                Err(TryRecvError::Empty) => {
-                    ctx.request_repaint_after(std::time::Duration::from_millis(50));
-                    return latest(self);
-                }
-                Ok(Ok(refined)) if *k == key || behind => {
-                    let texture =
-                        ctx.load_texture("refined view", refined.image, Default::default());
-                    self.last_ms = Some((refined.millis, refined.engine));
-                    self.frames += 1;
-                    self.shown = Some((k.clone(), texture));
-                    self.pending = None;
-                    if *self.shown.as_ref().map(|(k, _)| k).expect("just set") == key {
-                        return self.shown.as_ref().map(|(_, t)| t.id());
-                    }
+    ) -> Option<RefineWith> {
+        self.load(ctx, gpu, path);
+        self.enabled.then(|| RefineWith {
+            refiner: self.refiner.clone(),
+            path: path.to_path_buf(),
+            on: self.on,
+            behind,
+        })
+    }
+
+    /// Starts loading the refiner at `path` (for where it should run) unless it is loaded or
+    /// loading; takes the outcome of a load.
+    fn load(&mut self, ctx: &egui::Context, gpu: &GpuContext, path: &Path) {
+        if let Some(loading) = &self.loading {
+            match loading.outcome.try_recv() {
+                Err(TryRecvError::Empty) if loading.path == path && loading.on == self.on => {
+                    return;
                 }
                 Ok(Err(e)) => {
                     self.error = Some(e);
                     self.enabled = false;
-                    self.pending = None;
-                    return None;
+                    self.loading = None;
+                    return;
                 }
-                // Stale (the view changed while it was made), or the worker is gone.
-                _ => self.pending = None,
+                // Loaded, the worker gone, or loading another one (let it finish first).
+                Err(TryRecvError::Empty) => return,
+                _ => self.loading = None,
             }
         }
+        let loaded = match self.refiner.try_lock() {
+            Ok(guard) => guard
+                .as_ref()
+                .is_some_and(|r| r.path == path && r.on == self.on),
+            // Busy refining: it is the one asked for, or will be asked again next frame.
+            Err(_) => true,
+        };
+        if loaded {
+            return;
+        }
         let (tx, rx) = std::sync::mpsc::channel();
-        let (refiner, offscreen) = (self.refiner.clone(), offscreen.clone());
-        let (avatar, pose, job_key, ctx) = (avatar.clone(), pose.clone(), key.clone(), ctx.clone());
+        let (refiner, gpu, ctx) = (self.refiner.clone(), gpu.clone(), ctx.clone());
+        let (file, on) = (path.to_path_buf(), self.on);
         std::thread::spawn(move || {
-            let refined = refine(&refiner, &offscreen, &avatar, &pose, &job_key);
-            // The receiver is gone if the view moved on: nothing to do then.
-            let _ = tx.send(refined);
+            let mut slot = refiner.lock().unwrap_or_else(|e| e.into_inner());
+            let loaded = Refiner::load_on(on, &gpu, &file).map_err(|e| e.to_string());
+            let outcome = loaded.map(|r| *slot = Some(r));
+            drop(slot);
+            // The receiver is gone if the viewer closed: nothing to do then.
+            let _ = tx.send(outcome);
             ctx.request_repaint();
         });
-        self.pending = Some((key, rx));
-        latest(self)
+        self.loading = Some(Loading {
+            path: path.to_path_buf(),
+            on: self.on,
+            outcome: rx,
+        });
     }
-}
 
-/// Draws and refines one frame, composited over the key's background.
-fn refine(
-    refiner: &Mutex<Option<Refiner>>,
-    offscreen: &Mutex<OffscreenRenderer>,
-    avatar: &AvatarRef,
-    pose: &PoseRef,
-    key: &RefineKey,
-) -> Result<Refined, String> {
-    let started = Instant::now();
-    let mut refiner = refiner.lock().unwrap_or_else(|e| e.into_inner());
-    let refined = offscreen
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .refine_avatar(
-            &mut refiner,
-            (&key.refiner, key.on),
-            avatar,
-            pose,
-            key.outside,
-            &key.camera,
-        )?;
-    let rgb = refined.over(key.background);
-    Ok(Refined {
-        image: egui::ColorImage::from_rgb(
-            [rgb.width() as usize, rgb.height() as usize],
-            rgb.as_raw(),
-        ),
-        millis: started.elapsed().as_secs_f32() * 1e3,
-        engine: refiner
-            .as_ref()
-            .map_or(String::new(), |r| r.engine_name().to_string()),
-    })
+    /// Takes an error the view renderer met refining: shown, and refining switched off.
+    pub fn failed(&mut self, error: String) {
+        self.error = Some(error);
+        self.enabled = false;
+    }
 }

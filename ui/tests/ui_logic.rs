@@ -200,6 +200,16 @@ fn wait_until(h: &mut Harness<'static, GuavaApp>, done: impl Fn(&GuavaApp) -> bo
     }
 }
 
+/// [`wait_until`] drawing each frame: what the view renderer does (splatting, refining) happens
+/// only when frames are drawn, as in the window.
+fn wait_drawing(h: &mut Harness<'static, GuavaApp>, done: impl Fn(&GuavaApp) -> bool) {
+    let start = Instant::now();
+    while !done(h.state()) && start.elapsed() < Duration::from_secs(60) {
+        frame(h);
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
 /// Opens the demo portrait (copied into `dir` as `name` without its tracking, so it is fitted)
 /// and waits for its avatar; returns the avatar's label.
 fn reconstruct_demo_portrait(
@@ -714,7 +724,7 @@ fn dragging_draws_at_reduced_resolution_and_settles_at_full() {
 #[test]
 fn the_settled_view_is_refined_and_a_drag_shows_the_raw_splat() {
     let mut h = synthetic_avatar();
-    wait_until(&mut h, |app| app.refined_frames() > 0);
+    wait_drawing(&mut h, |app| app.refined_frames() > 0);
     assert_eq!(h.state().refined_frames(), 1);
     frame(&mut h);
     let renders = frames_without_splatting(&mut h, 3, "the refined frame");
@@ -746,7 +756,7 @@ fn the_settled_view_is_refined_and_a_drag_shows_the_raw_splat() {
         "nothing refined while dragging"
     );
     h.drop_at(end);
-    wait_until(&mut h, |app| app.refined_frames() > 1);
+    wait_drawing(&mut h, |app| app.refined_frames() > 1);
     assert_eq!(
         h.state().refined_frames(),
         2,
@@ -768,11 +778,17 @@ fn the_refiner_runs_where_the_user_chooses() {
     h.state_mut().set_refiner_on(RefinerOn::Gpu);
     h.state_mut().reconstruct_synthetic_photo();
     wait_until(&mut h, |app| app.avatar_info().is_some());
-    wait_until(&mut h, |app| app.refined_frames() > 0);
-    assert_eq!(h.state().refined_engine(), Some("WGSL compute passes"));
+    wait_drawing(&mut h, |app| app.refined_frames() > 0);
+    assert_eq!(
+        h.state().refined_engine().as_deref(),
+        Some("WGSL compute passes")
+    );
     h.state_mut().set_refiner_on(RefinerOn::Cpu);
-    wait_until(&mut h, |app| app.refined_frames() > 1);
-    assert_eq!(h.state().refined_engine(), Some("ONNX Runtime (CPU)"));
+    wait_drawing(&mut h, |app| app.refined_frames() > 1);
+    assert_eq!(
+        h.state().refined_engine().as_deref(),
+        Some("ONNX Runtime (CPU)")
+    );
     assert_eq!(h.state().refined_frames(), 2);
 }
 
@@ -976,7 +992,7 @@ fn a_viewport_beyond_the_texture_limit_is_refined() {
         .build_eframe(|cc| GuavaApp::new(cc, Options::default()));
     h.run();
     h.state_mut().reconstruct_synthetic_photo();
-    wait_until(&mut h, |app| app.refined_frames() > 0);
+    wait_drawing(&mut h, |app| app.refined_frames() > 0);
     assert_eq!(h.state().refined_frames(), 1);
     frame(&mut h);
     let size = h.state().report().rendered_size;
@@ -1279,7 +1295,7 @@ fn a_keyed_camera_path_is_flown_by_the_export() {
 #[test]
 fn refining_while_interacting_shows_the_latest_refined_frame() {
     let mut h = synthetic_avatar();
-    wait_until(&mut h, |app| app.refined_frames() > 0);
+    wait_drawing(&mut h, |app| app.refined_frames() > 0);
     h.state_mut().set_refine_while_interacting(true);
     let before = h.state().refined_frames();
     let at = egui::pos2(900.0, 350.0);
@@ -1299,7 +1315,7 @@ fn refining_while_interacting_shows_the_latest_refined_frame() {
     h.get_by_label("refined (an earlier frame)");
     h.drop_at(at + egui::vec2(dx, 0.0));
     let dragged = h.state().refined_frames();
-    wait_until(&mut h, |app| app.refined_frames() > dragged);
+    wait_drawing(&mut h, |app| app.refined_frames() > dragged);
     for _ in 0..3 {
         frame(&mut h);
     }

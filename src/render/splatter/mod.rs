@@ -11,7 +11,7 @@ mod buffers;
 
 use super::layout::{FrameUniform, GpuGaussian, PROJECTED_SIZE};
 use super::pipelines::{FeatureStorage, SplatPipelines, dispatch_1d};
-use super::readback::{read_buffers, read_texture_floats};
+use super::readback::{TextureCopy, read_buffers, read_texture_floats, wait};
 use super::timing::StageTimer;
 use super::{RenderStats, SplatError, SplatImage};
 use crate::camera::Camera;
@@ -125,6 +125,38 @@ fn planes(texels: &[f32], lanes: usize, channels: usize) -> Vec<f32> {
             layer.iter().skip(c % lanes).step_by(lanes).copied()
         })
         .collect()
+}
+
+/// The splat output on its way to the CPU: copied by a command encoder, mapped once that is
+/// submitted ([`ImageCopy::map`]), read after the device is polled past it.
+pub struct ImageCopy {
+    features: TextureCopy,
+    aux: TextureCopy,
+    size: [u32; 2],
+    channels: usize,
+}
+
+impl ImageCopy {
+    pub fn map(&self) {
+        self.features.map();
+        self.aux.map();
+    }
+
+    /// The image (call after the mapping completed).
+    pub fn image(&self) -> SplatImage {
+        let features: Vec<f32> = bytemuck::pod_collect_to_vec(&self.features.bytes());
+        let aux: Vec<f32> = bytemuck::pod_collect_to_vec(&self.aux.bytes());
+        let mut alpha = planes(&aux, 2, 2);
+        let inv_depth = alpha.split_off(aux.len() / 2);
+        SplatImage {
+            width: self.size[0],
+            height: self.size[1],
+            channels: self.channels,
+            features: planes(&features, 4, self.channels),
+            alpha,
+            inv_depth,
+        }
+    }
 }
 
 /// A view of every layer as a 2D array, also for single-layer textures (whose default view is 2D).
@@ -460,16 +492,28 @@ impl Splatter {
 
     /// Copies the output to the CPU (waits for the GPU).
     pub fn read_image(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Option<SplatImage> {
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("Splatter::read_image"),
+        });
+        let copy = self.copy_image(device, &mut encoder)?;
+        queue.submit([encoder.finish()]);
+        copy.map();
+        wait(device);
+        Some(copy.image())
+    }
+
+    /// Records a copy of the output to staging, to be read once submitted ([`ImageCopy`]).
+    pub fn copy_image(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Option<ImageCopy> {
         let v = self.view.as_ref()?;
-        let features = read_texture_floats(device, queue, &v.out_features);
-        let [alpha, inv_depth] = self.read_aux(device, queue)?;
-        Some(SplatImage {
-            width: v.width,
-            height: v.height,
+        Some(ImageCopy {
+            features: TextureCopy::encode(device, encoder, &v.out_features),
+            aux: TextureCopy::encode(device, encoder, &v.out_aux),
+            size: [v.width, v.height],
             channels: v.channels as usize,
-            features: planes(&features, 4, v.channels as usize),
-            alpha,
-            inv_depth,
         })
     }
 

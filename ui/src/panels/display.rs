@@ -101,8 +101,9 @@ impl GuavaApp {
                      faster, and for GUAVA's refiner, whose operators the passes do not run",
                 );
         });
-        if let Some((ms, engine)) = &self.refined.last_ms {
-            ui.label(format!("last refined frame: {ms:.0} ms, {engine}"));
+        let refine = self.report().refine;
+        if let Some(last) = last_refined(&refine) {
+            ui.label(format!("last refined frame: {last}"));
         }
         if let Some(e) = &self.refined.error {
             ui.colored_label(ui.visuals().error_fg_color, format!("refiner off: {e}"));
@@ -168,12 +169,12 @@ impl GuavaApp {
                     }
                     None => row("GPU stages", "no timestamps here".into()),
                 }
-                if let Some((ms, engine)) = &self.refined.last_ms {
-                    row("refine (last)", format!("{ms:.0} ms, {engine}"));
+                if let Some(last) = last_refined(&report.refine) {
+                    row("refine (last)", last);
                 }
                 row(
                     "on screen",
-                    match (self.refined.showing, self.refined.behind) {
+                    match (report.refine.showing, report.refine.behind) {
                         (true, false) => "refined",
                         (true, true) => "refined (an earlier frame)",
                         (false, _) => "raw splat",
@@ -213,4 +214,13 @@ impl GuavaApp {
                 }
             });
     }
+}
+
+/// Where the last refined picture was made and how long it took to reach the screen.
+fn last_refined(refine: &guava::render::view::RefineReport) -> Option<String> {
+    let engine = refine.engine.as_ref()?;
+    Some(match refine.ms {
+        Some(ms) => format!("{ms:.0} ms, {engine}"),
+        None => format!("{engine}, recorded with the frame"),
+    })
 }

@@ -3,12 +3,11 @@
 
 use std::time::Duration;
 
-use guava::render::view::{CloudRef, Content, Frame, Look};
+use guava::render::view::{CloudRef, Content, Frame, Look, RefineWith};
 
 use crate::app::{CameraMode, GuavaApp, View};
 use crate::compare::Shown;
 use crate::files::demo_portrait;
-use crate::refined::RefineKey;
 use crate::viewport::ViewportCallback;
 
 /// How soon after the last interactive frame a full-resolution one is drawn (scrolling and
@@ -130,9 +129,9 @@ impl GuavaApp {
             scale,
             preview,
             pane,
+            refine: None,
         };
         if let Content::Mesh(_) = content {
-            self.refined.showing = false;
             self.paint_frame(ui, rect, rect, frame(content, 0));
             return;
         }
@@ -156,11 +155,15 @@ impl GuavaApp {
             )],
         };
         let refine_now = !interacting || self.refined.while_interacting;
-        let refined = match panes.iter().any(|(_, s)| *s == Shown::Refined) && refine_now {
-            true => self.refined_frame(ui.ctx(), &content, camera, interacting),
+        let refine = match panes.iter().any(|(_, s)| *s == Shown::Refined) && refine_now {
+            true => self.refine_with(ui.ctx(), &content, interacting),
             false => None,
         };
-        self.refined.showing = refined.is_some();
+        if refine.is_none() {
+            // No pane asks for the refined picture: none is on screen.
+            let mut report = self.report.lock().unwrap_or_else(|e| e.into_inner());
+            (report.refine.showing, report.refine.behind) = (false, false);
+        }
         for (pane, &(clip, shown)) in panes.iter().enumerate() {
             match shown.display(&self.display) {
                 Some(display) => {
@@ -169,19 +172,13 @@ impl GuavaApp {
                     {
                         look.display = display;
                     }
-                    // The splatting view gets its frame even under the refined picture:
-                    // unchanged, it draws nothing new, and its counters keep reaching the HUD.
-                    self.paint_frame(ui, rect, clip, frame(content, pane));
-                    if let (Shown::Refined, Some(texture)) = (shown, refined) {
-                        let full =
-                            egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
-                        ui.painter().with_clip_rect(clip).image(
-                            texture,
-                            rect,
-                            full,
-                            egui::Color32::WHITE,
-                        );
+                    // The refined pane's frame carries the refiner: the view refines its own
+                    // splat image and presents the picture once made (the raw splat before).
+                    let mut frame = frame(content, pane);
+                    if shown == Shown::Refined {
+                        frame.refine = refine.clone();
                     }
+                    self.paint_frame(ui, rect, clip, frame);
                 }
                 None if shown == Shown::Mesh => {
                     if let Some(body) = &mut self.body {
@@ -251,7 +248,7 @@ impl GuavaApp {
             (shown[0], x - 8.0, egui::Align2::RIGHT_TOP),
             (shown[1], x + 8.0, egui::Align2::LEFT_TOP),
         ] {
-            let text = match (s, self.refined.showing) {
+            let text = match (s, self.report().refine.showing) {
                 (Shown::Refined, false) => "refined (raw until it settles)",
                 _ => s.name(),
             };
@@ -297,26 +294,19 @@ impl GuavaApp {
         }
     }
 
-    /// The refined frame of an avatar, once ready (see
-    /// [`crate::refined`]); `None` while it is made, or when the refiner does not apply.
-    fn refined_frame(
+    /// What the view refines an avatar's frame with (see [`crate::refined`]); `None` where
+    /// the refiner does not apply (and the display panel says why).
+    fn refine_with(
         &mut self,
         ctx: &egui::Context,
         content: &Content,
-        camera: guava::camera::Camera,
         interacting: bool,
-    ) -> Option<egui::TextureId> {
+    ) -> Option<RefineWith> {
         self.refined.unavailable = None;
-        let Content::Avatar {
-            avatar,
-            pose,
-            outside,
-            ..
-        } = content
-        else {
+        let Content::Avatar { avatar, .. } = content else {
             return None;
         };
-        let offscreen = self.gpu.offscreen.as_ref()?;
+        let gpu = self.gpu.context.as_ref()?;
         let networks = self.networks.as_ref().map(|n| n.dir.as_path());
         let refiner = guava::refine::refiner_for(avatar.avatar.kind, networks);
         self.refined.unavailable = refiner
@@ -324,22 +314,7 @@ impl GuavaApp {
             .err()
             .map(|e| format!("{e} (Mode panel > Networks folder…)"));
         let refiner = refiner.ok()?;
-        // The refined frame becomes a texture: no side beyond what egui's device takes (a
-        // taller viewport panicked); it is stretched over the viewport then.
-        let max = ctx.input(|i| i.max_texture_side) as f32;
-        let largest = camera.width.max(camera.height) as f32;
-        let camera = camera.scaled((max / largest).min(1.0));
-        let key = RefineKey {
-            refiner,
-            on: self.refined.on,
-            avatar: avatar.id,
-            pose: pose.id,
-            camera,
-            background: self.background,
-            outside: *outside,
-        };
-        self.refined
-            .frame(ctx, key, offscreen, avatar, pose, interacting)
+        self.refined.with(ctx, gpu, &refiner, interacting)
     }
 
     fn empty_state_ui(&mut self, ui: &mut egui::Ui, rect: egui::Rect) {

@@ -208,10 +208,9 @@ fn interaction(
                 scale,
                 preview,
                 pane: 0,
+                refine: None,
             };
-            if let Some(commands) = view.prepare(device, queue, &frame, &mut report) {
-                queue.submit([commands]);
-            }
+            queue.submit(view.prepare(device, queue, &frame, &mut report));
             guava::render::wait(device);
             if k >= 3 {
                 times.push(t0.elapsed().as_secs_f64() * 1e3);

@@ -4,7 +4,12 @@
 //! and hands it over. [`ViewRenderer::prepare`] records work only for what changed since the last
 //! render — a cloud or an avatar goes up once, a new pose runs the rig pass, a new camera or
 //! background re-splats — and reads the splatting counters back without waiting (a frame later);
-//! [`ViewRenderer::paint`] only composites.
+//! [`ViewRenderer::paint`] only composites. The refiner is a pass on the same frame
+//! ([`refined`]).
+
+mod refined;
+
+pub use refined::{RefineReport, RefineWith};
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -18,6 +23,7 @@ use crate::avatar::Avatar;
 use crate::body::PosedBody;
 use crate::camera::Camera;
 use crate::gaussians::GaussianCloud;
+use refined::{RefineStage, Showing};
 
 /// What one view draws this frame.
 #[derive(Clone)]
@@ -33,6 +39,9 @@ pub struct Frame {
     /// Which pane of the view this is (below [`PANES`]): the sides of a split present the same
     /// splats each its own way (its [`Look`]'s display), each pane drawn by its own callback.
     pub pane: usize,
+    /// Present an avatar's frame refined (by [`RefineWith`]'s refiner) once its picture is
+    /// made; the raw splat meanwhile.
+    pub refine: Option<RefineWith>,
 }
 
 /// Panes a view presents at once (a split's two sides).
@@ -90,7 +99,8 @@ pub struct MeshFrame {
     pub style: MeshStyle,
 }
 
-/// How splats are shown: the background (one value per channel) and the present mode.
+/// How splats are shown: the background (one value per channel; the displayed ones are
+/// composited under the splats by the present pass) and the present mode.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Look {
     pub background: Vec<f32>,
@@ -138,6 +148,9 @@ pub struct ViewReport {
     pub prepare_ms: f32,
     /// GPU memory the splatting pass holds (bytes).
     pub splat_bytes: u64,
+    /// Avatars uploaded to the GPU (all Gaussians, or a coarse stand-in): each once while shown.
+    pub avatar_uploads: u64,
+    pub refine: RefineReport,
 }
 
 /// The splat counters' size in the readback buffer.
@@ -154,12 +167,13 @@ enum Source {
     },
 }
 
-#[derive(PartialEq)]
+/// What the splat output shows. The splats are rendered on black (the background is
+/// composited when presenting), so one output serves every pane and the refiner.
+#[derive(Clone, PartialEq)]
 struct SplatKey {
     source: Source,
     pose: Option<u64>,
     camera: Camera,
-    background: Vec<f32>,
 }
 
 #[derive(PartialEq)]
@@ -185,10 +199,14 @@ enum StatsReadback {
     Mapping(Arc<AtomicBool>),
 }
 
-/// One pane's present settings and its binding of the splat output.
+/// One pane's present settings and its bindings of the splat output and the refined picture,
+/// and which one it presents.
 struct Pane {
     uniform: wgpu::Buffer,
     bind: Option<wgpu::BindGroup>,
+    /// Made for the picture texture of this generation ([`RefineStage::generation`]).
+    refined_bind: Option<(u64, wgpu::BindGroup)>,
+    refined: bool,
 }
 
 pub struct ViewRenderer {
@@ -210,6 +228,7 @@ pub struct ViewRenderer {
     mesh_topology: Option<u64>,
     mesh_uploaded: Option<u64>,
     mesh_last: Option<MeshKey>,
+    refine: RefineStage,
 }
 
 impl ViewRenderer {
@@ -224,6 +243,16 @@ impl ViewRenderer {
             device,
             RasterTuning::for_device(adapter, device.features()),
         ));
+        Self::with_pipelines(device, queue, pipelines, target)
+    }
+
+    /// With splatting pipelines shared with other renderers on the device.
+    pub fn with_pipelines(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        pipelines: Arc<SplatPipelines>,
+        target: wgpu::TextureFormat,
+    ) -> Self {
         let timer = StageTimer::new(device, queue);
         Self {
             splatter: Splatter::new(device, pipelines.clone()),
@@ -241,6 +270,8 @@ impl ViewRenderer {
                     mapped_at_creation: false,
                 }),
                 bind: None,
+                refined_bind: None,
+                refined: false,
             }),
             stats_staging: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("View::stats_staging"),
@@ -254,23 +285,30 @@ impl ViewRenderer {
             mesh_topology: None,
             mesh_uploaded: None,
             mesh_last: None,
+            refine: RefineStage::new(),
         }
     }
 
-    /// Records what `frame` needs beyond the last render, if anything.
+    /// The splatting pipelines, to share with other renderers on the device.
+    pub fn pipelines(&self) -> Arc<SplatPipelines> {
+        self.pipelines.clone()
+    }
+
+    /// Records what `frame` needs beyond the last render, if anything (submit in order).
     pub fn prepare(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         frame: &Frame,
         report: &mut ViewReport,
-    ) -> Option<wgpu::CommandBuffer> {
+    ) -> Vec<wgpu::CommandBuffer> {
         let started = std::time::Instant::now();
-        let buffer = self.prepare_content(device, queue, frame, report);
-        if buffer.is_some() {
+        let mut commands = Vec::new();
+        self.prepare_content(device, queue, frame, report, &mut commands);
+        if !commands.is_empty() {
             report.prepare_ms = started.elapsed().as_secs_f32() * 1e3;
         }
-        buffer
+        commands
     }
 
     fn prepare_content(
@@ -279,9 +317,12 @@ impl ViewRenderer {
         queue: &wgpu::Queue,
         frame: &Frame,
         report: &mut ViewReport,
-    ) -> Option<wgpu::CommandBuffer> {
+        commands: &mut Vec<wgpu::CommandBuffer>,
+    ) {
         match &frame.content {
-            Content::Mesh(mesh) => self.prepare_mesh(device, queue, mesh, &frame.camera, report),
+            Content::Mesh(mesh) => {
+                commands.extend(self.prepare_mesh(device, queue, mesh, &frame.camera, report));
+            }
             Content::Cloud { cloud, look } => {
                 let source = Source::Cloud(cloud.id);
                 if self.source != Some(source) {
@@ -292,7 +333,7 @@ impl ViewRenderer {
                         report.error = Some(e.to_string());
                     }
                 }
-                self.prepare_splats(device, queue, None, false, frame, look, report)
+                self.prepare_splats(device, queue, None, false, frame, look, report, commands);
             }
             Content::Avatar {
                 avatar,
@@ -306,6 +347,7 @@ impl ViewRenderer {
                     outside: *outside,
                 };
                 if self.avatar.as_ref().is_none_or(|a| a.id != avatar.id) {
+                    report.avatar_uploads += 1;
                     self.avatar = Some(ShownAvatar {
                         id: avatar.id,
                         full: GpuAvatar::new(
@@ -326,6 +368,7 @@ impl ViewRenderer {
                 let shown = self.avatar.as_mut().expect("made above");
                 let gpu = match frame.preview {
                     true => shown.preview.get_or_insert_with(|| {
+                        report.avatar_uploads += 1;
                         let preview = avatar.avatar.preview();
                         GpuAvatar::new(
                             device,
@@ -340,7 +383,7 @@ impl ViewRenderer {
                 gpu.show_outside(queue, *outside);
                 if let Err(e) = gpu.attach(device, queue, &mut self.splatter) {
                     report.error = Some(e.to_string());
-                    return None;
+                    return;
                 }
                 let mut new_pose = false;
                 if self.rigged != Some((source, pose.id)) {
@@ -352,7 +395,7 @@ impl ViewRenderer {
                     }
                 }
                 let pose = Some(pose.id);
-                self.prepare_splats(device, queue, pose, new_pose, frame, look, report)
+                self.prepare_splats(device, queue, pose, new_pose, frame, look, report, commands);
             }
         }
     }
@@ -367,8 +410,8 @@ impl ViewRenderer {
         }
     }
 
-    /// Re-splats when the input, pose, camera or background changed (running the rig pass first
-    /// for a `new_pose`); updates the present uniform either way.
+    /// Re-splats when the input, pose or camera changed (running the rig pass first for a
+    /// `new_pose`), refines where the frame asks; updates the pane's present uniform either way.
     #[allow(clippy::too_many_arguments)]
     fn prepare_splats(
         &mut self,
@@ -379,7 +422,8 @@ impl ViewRenderer {
         frame: &Frame,
         look: &Look,
         report: &mut ViewReport,
-    ) -> Option<wgpu::CommandBuffer> {
+        commands: &mut Vec<wgpu::CommandBuffer>,
+    ) {
         let pane = frame.pane.min(PANES - 1);
         if let Some((stats, stage_ms)) = self.poll_stats(device, pane) {
             if self.splatter.grow_for(device, &stats) {
@@ -391,16 +435,17 @@ impl ViewRenderer {
         }
         report.splat_bytes = self.splatter.memory().total();
         let camera = frame.camera.scaled(frame.scale);
+        let Some(source) = self.source else { return };
         let key = SplatKey {
-            source: self.source?,
+            source,
             pose,
             camera,
-            background: look.background.clone(),
         };
-        let mut buffer = None;
-        if self.last.as_ref() != Some(&key) && self.splatter.channels().is_some() {
+        if let Some(channels) = self.splatter.channels()
+            && self.last.as_ref() != Some(&key)
+        {
             self.splatter
-                .prepare(device, queue, &camera, &look.background);
+                .prepare(device, queue, &camera, &vec![0.0; channels as usize]);
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("View::splat"),
             });
@@ -431,26 +476,65 @@ impl ViewRenderer {
                 }
                 self.stats_state = StatsReadback::Copied { pane };
             }
-            buffer = Some(encoder.finish());
+            commands.push(encoder.finish());
             // Every pane presents the new output (the splatter may have reallocated it).
             for p in &mut self.panes {
                 p.bind = self.present.bind(device, &p.uniform, &self.splatter);
+                p.refined_bind = None;
             }
-            self.last = Some(key);
+            self.last = Some(key.clone());
             report.renders += 1;
             report.rendered_size = [camera.width, camera.height];
         } else if !matches!(self.stats_state, StatsReadback::Idle) {
             report.needs_redraw = true;
         }
+        let showing = match &frame.refine {
+            Some(with) if pose.is_some() && self.last.as_ref() == Some(&key) => {
+                let stage = &mut self.refine;
+                stage.prepare(
+                    device,
+                    queue,
+                    &self.splatter,
+                    &key,
+                    with,
+                    pane,
+                    commands,
+                    report,
+                )
+            }
+            _ => Showing::Raw,
+        };
         let d = &look.display;
-        let uniform = self.present.uniform(
-            [camera.width, camera.height],
-            d.mode,
-            d.rgb_channels,
-            d.inv_depth_range,
-        );
-        queue.write_buffer(&self.panes[pane].uniform, 0, bytemuck::bytes_of(&uniform));
-        buffer
+        let background = d
+            .rgb_channels
+            .map(|c| look.background.get(c as usize).copied());
+        let background = background.map(|b| b.unwrap_or(0.0));
+        let uniform = match showing {
+            Showing::Refined(size) => self.present.refined_uniform(size, background),
+            Showing::Raw => self.present.uniform(
+                [camera.width, camera.height],
+                d.mode,
+                d.rgb_channels,
+                d.inv_depth_range,
+                background,
+            ),
+        };
+        let p = &mut self.panes[pane];
+        p.refined = matches!(showing, Showing::Refined(_));
+        let generation = self.refine.generation();
+        if p.refined
+            && p.refined_bind
+                .as_ref()
+                .is_none_or(|(g, _)| *g != generation)
+        {
+            // A new picture texture, or a new splat output: bind them again.
+            let texture = self.refine.texture().expect("a picture is shown");
+            p.refined_bind = self
+                .present
+                .bind_refined(device, &p.uniform, texture, &self.splatter)
+                .map(|bind| (generation, bind));
+        }
+        queue.write_buffer(&p.uniform, 0, bytemuck::bytes_of(&uniform));
     }
 
     /// Re-draws the mesh view when the pose, camera or style changed.
@@ -551,7 +635,12 @@ impl ViewRenderer {
     pub fn paint(&self, pass: &mut wgpu::RenderPass<'static>, frame: &Frame) {
         match &frame.content {
             Content::Cloud { .. } | Content::Avatar { .. } => {
-                if let Some(bind) = &self.panes[frame.pane.min(PANES - 1)].bind {
+                let pane = &self.panes[frame.pane.min(PANES - 1)];
+                let bind = match pane.refined {
+                    true => pane.refined_bind.as_ref().map(|(_, b)| b),
+                    false => pane.bind.as_ref(),
+                };
+                if let Some(bind) = bind {
                     self.present.draw(pass, bind);
                 }
             }
