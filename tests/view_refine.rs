@@ -208,6 +208,7 @@ fn the_view_refines_its_own_frame_as_the_offscreen_path_does() {
             path: path.to_path_buf(),
             on,
             behind: false,
+            wake: None,
         };
         *shared.lock().expect("unlocked") = Some(loaded);
         let before = report.refine.frames;

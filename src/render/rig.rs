@@ -228,6 +228,23 @@ impl GpuAvatar {
         self.len() == 0
     }
 
+    /// GPU memory its own buffers hold (its Gaussians' features live in the splatter it is
+    /// attached to).
+    pub fn gpu_bytes(&self) -> u64 {
+        [
+            &self.params,
+            &self.template,
+            &self.skinned,
+            &self.uv,
+            &self.triangles,
+            &self.posed,
+            &self.frames,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum()
+    }
+
     /// Makes `splatter` hold this avatar: room for the Gaussians drawn and their features,
     /// written again only when the splatter's buffers were reallocated, held something else, or
     /// the Gaussians drawn changed.

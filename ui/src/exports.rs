@@ -149,6 +149,7 @@ impl GuavaApp {
                 path,
                 on: self.refined.on,
                 behind: false,
+                wake: None,
             });
         Ok(Shot {
             offscreen,

@@ -11,6 +11,7 @@ use guava::gpu::GpuContext;
 use guava::refine::{Refiner, RefinerOn, SharedRefiner};
 use guava::render::view::RefineWith;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::mpsc::{Receiver, TryRecvError};
 
 pub struct RefinedView {
@@ -62,11 +63,13 @@ impl RefinedView {
         behind: bool,
     ) -> Option<RefineWith> {
         self.load(ctx, gpu, path);
+        let ctx = ctx.clone();
         self.enabled.then(|| RefineWith {
             refiner: self.refiner.clone(),
             path: path.to_path_buf(),
             on: self.on,
             behind,
+            wake: Some(Arc::new(move || ctx.request_repaint())),
         })
     }
 

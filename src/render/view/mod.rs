@@ -648,6 +648,14 @@ impl ViewRenderer {
         }
     }
 
+    /// GPU memory the shown avatar's own buffers hold (all Gaussians, and the coarse stand-in
+    /// once used).
+    pub fn avatar_bytes(&self) -> u64 {
+        self.avatar.as_ref().map_or(0, |a| {
+            a.full.gpu_bytes() + a.preview.as_ref().map_or(0, GpuAvatar::gpu_bytes)
+        })
+    }
+
     /// GPU memory the splatting pass holds (for the HUD).
     pub fn memory(&self) -> super::splatter::MemoryUse {
         self.splatter.memory()

@@ -8,7 +8,7 @@
 
 use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, TryRecvError};
-use std::sync::{Mutex, TryLockError};
+use std::sync::{Arc, Mutex, TryLockError};
 use std::time::Instant;
 
 use super::{SplatKey, ViewReport};
@@ -28,6 +28,9 @@ pub struct RefineWith {
     /// While the next picture is made, show the latest one though it was made for an earlier
     /// frame (the user drags or plays with refining on).
     pub behind: bool,
+    /// Called from the worker when a picture from the CPU refiner is ready (a UI asks for a
+    /// frame), so nothing polls meanwhile.
+    pub wake: Option<Arc<dyn Fn() + Send + Sync>>,
 }
 
 /// What the view tells its UI of the refiner.
@@ -76,6 +79,7 @@ enum Work {
         made: Made,
         copy: ImageCopy,
         refiner: SharedRefiner,
+        wake: Option<Arc<dyn Fn() + Send + Sync>>,
         pane: usize,
         asked: Instant,
     },
@@ -182,6 +186,7 @@ impl RefineStage {
                 made,
                 copy,
                 refiner,
+                wake,
                 pane: copied,
                 asked,
             } if copied == pane => {
@@ -201,13 +206,15 @@ impl RefineStage {
                     };
                     // The receiver is gone if the view was dropped: nothing to do then.
                     let _ = tx.send(refined);
+                    if let Some(wake) = wake {
+                        wake();
+                    }
                 });
                 self.work = Work::Refining {
                     made,
                     rx: Mutex::new(rx),
                     asked,
                 };
-                report.needs_redraw = true;
             }
             copied @ Work::Copied { .. } => {
                 // Copied by another pane this UI frame: not submitted yet.
@@ -215,10 +222,8 @@ impl RefineStage {
                 report.needs_redraw = true;
             }
             Work::Refining { made, rx, asked } => match try_recv(&rx) {
-                Err(TryRecvError::Empty) => {
-                    self.work = Work::Refining { made, rx, asked };
-                    report.needs_redraw = true;
-                }
+                // The worker wakes the UI when it is done.
+                Err(TryRecvError::Empty) => self.work = Work::Refining { made, rx, asked },
                 Ok(Ok(Some((picture, engine)))) if made == *wanted || behind => {
                     self.upload(device, queue, &picture, made);
                     report.refine.frames += 1;
@@ -292,6 +297,7 @@ impl RefineStage {
                 made,
                 copy,
                 refiner: with.refiner.clone(),
+                wake: with.wake.clone(),
                 pane,
                 asked: Instant::now(),
             };
