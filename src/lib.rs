@@ -1,7 +1,8 @@
 //! guava-rs: GUAVA upper-body Gaussian avatars (ICCV 2025) in Rust on wgpu.
 //!
 //! Data flows one way: inputs → body → Gaussians → splat → refine → screen. This crate holds
-//! every stage, each runnable headless; the `ui` crate is the viewer window around it.
+//! every stage, each runnable headless; the `cli` crate is the `guava` command around it, the
+//! `ui` crate the viewer window.
 
 pub mod atomic_file;
 pub mod avatar;
@@ -28,3 +29,10 @@ pub mod synthetic;
 pub mod track;
 pub mod tracking;
 pub mod video;
+
+/// The repository the library was built from: its assets (models, the demo portrait, the demo
+/// clip) ship in it and are read from there, never downloaded.
+pub const REPO: &str = env!("CARGO_MANIFEST_DIR");
+
+/// The demo portrait (the viewer's first launch, benchmarks, tests).
+pub const DEMO_PORTRAIT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/demo_portrait.png");

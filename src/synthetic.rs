@@ -476,8 +476,7 @@ pub fn shaded(
 /// The demo portrait pasted at `at` on a `size` canvas of its background's grey: a photo where
 /// the centred square cuts the person, or leaves them small.
 pub fn portrait_placed(size: [u32; 2], at: [i64; 2]) -> image::ImageResult<image::RgbImage> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png");
-    let portrait = image::open(path)?.to_rgb8();
+    let portrait = image::open(crate::DEMO_PORTRAIT)?.to_rgb8();
     let mut photo = image::RgbImage::from_pixel(size[0], size[1], image::Rgb([150, 150, 160]));
     image::imageops::replace(&mut photo, &portrait, at[0], at[1]);
     Ok(photo)

@@ -6,7 +6,6 @@ mod common;
 mod npz_writer;
 
 mod body;
-mod cli;
 mod ehm;
 mod ehm_fit;
 mod everyday_photos;

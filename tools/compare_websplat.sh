@@ -57,7 +57,7 @@ cp tools/websplat_compare/guava_compare.rs "$work/web-splat/src/bin/guava_compar
 
 echo "building web-splat's harness and guava (release)…" >&2
 cargo build -q --release --manifest-path "$work/web-splat/Cargo.toml" --bin guava_compare
-cargo build -q --release -p guava --bin guava
+cargo build -q --release -p guava-cli
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
 peer="$work/web-splat/target/release/guava_compare"
 guava=target/release/guava

@@ -7,8 +7,8 @@ subject drawn antialiased (premultiplied RGB, coverage). The network is a small 
 correction to the input's RGB and alpha; it is fully convolutional, so it runs at any size that
 is a multiple of 4.
 
-    cargo run --release -p guava -- refiner-pairs --out /tmp/refiner/train --split train
-    cargo run --release -p guava -- refiner-pairs --out /tmp/refiner/held --split held-out
+    cargo run --release -p guava-cli -- refiner-pairs --out /tmp/refiner/train --split train
+    cargo run --release -p guava-cli -- refiner-pairs --out /tmp/refiner/held --split held-out
     python tools/train_refiner.py --train /tmp/refiner/train --held /tmp/refiner/held \
         --out assets/refiner/default_refiner.onnx
 

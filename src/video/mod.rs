@@ -3,6 +3,13 @@
 //! --video` and the viewer's live driving read every video through [`FrameSource`]; a webcam is
 //! one more source behind the `webcam` cargo feature.
 
+/// The clip shipped for trying live driving and self-reenactment (a Pexels video; credits in
+/// assets/CREDITS.md).
+pub const DEMO_VIDEO: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/assets/videos/pexels_3063838_woman_emotions.mp4"
+);
+
 mod folder;
 
 mod mp4_file;

@@ -26,7 +26,7 @@ use guava::body::AnyBody;
 /// The shipped demo portrait (scikit-image's astronaut, public domain), with its fitted tracking
 /// beside it (`assets/demo_portrait.json`, written by `guava fit`).
 pub fn demo_portrait() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/demo_portrait.png")
+    PathBuf::from(guava::DEMO_PORTRAIT)
 }
 
 /// The name the synthetic demo photo goes by in the UI and in the avatar it makes.

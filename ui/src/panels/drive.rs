@@ -7,10 +7,9 @@ use std::path::PathBuf;
 use crate::app::GuavaApp;
 use crate::drive::{Drive, DriveSource};
 
-/// The clip shipped for trying live driving (a Pexels video; credits in assets/CREDITS.md).
+/// The clip shipped for trying live driving.
 pub fn demo_video() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../assets/videos/pexels_3063838_woman_emotions.mp4")
+    PathBuf::from(guava::video::DEMO_VIDEO)
 }
 
 /// What the menu says when the webcam is not built in.

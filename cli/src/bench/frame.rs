@@ -48,8 +48,7 @@ pub struct FrameBenchArgs {
 
 pub fn frame(args: &FrameBenchArgs) -> anyhow::Result<()> {
     let body = BodyModel::default_body()?;
-    let portrait =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png");
+    let portrait = std::path::PathBuf::from(guava::DEMO_PORTRAIT);
     let outcome = Pipeline::default().reconstruct(
         Mode::Default(&body),
         Photo::File(&portrait),

@@ -43,8 +43,7 @@ pub fn guava(args: &GuavaBenchArgs) -> anyhow::Result<()> {
     let t = Instant::now();
     let uv = uv_map(&body, d.uv as u32);
     let uv_ms = t.elapsed().as_secs_f64() * 1e3;
-    let portrait =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png");
+    let portrait = std::path::PathBuf::from(guava::DEMO_PORTRAIT);
     let rgba = image::open(&portrait)?.to_rgba8();
     let image = SourceImage::from_rgba_at(&rgba, None, false, "demo_portrait.png", d.image as u32)?;
     // GUAVA's tracker camera: 22 m away at invtanfov 24, the body upright in view.

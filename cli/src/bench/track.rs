@@ -14,12 +14,6 @@ use guava::video::{FrameList, VideoFrame};
 
 use super::body::cpu_name;
 
-/// The real clip the benchmark tracks unless told otherwise.
-pub const DEMO_VIDEO: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/assets/videos/pexels_3063838_woman_emotions.mp4"
-);
-
 #[derive(clap::Args, Clone, Debug)]
 pub struct TrackBenchArgs {
     /// The video to scale to each size (H.264 MP4/MOV); default: the shipped Pexels clip.
@@ -40,7 +34,7 @@ pub fn track(args: &TrackBenchArgs) -> Result<()> {
     let video = args
         .video
         .clone()
-        .unwrap_or_else(|| PathBuf::from(DEMO_VIDEO));
+        .unwrap_or_else(|| PathBuf::from(guava::video::DEMO_VIDEO));
     let mut source = guava::video::open(&video, 30.0)?;
     let fps = source.info().fps;
     let frames: Vec<VideoFrame> = std::iter::from_fn(|| source.next_frame())

@@ -45,7 +45,7 @@ pub fn fidelity(_: &FidelityBenchArgs) -> anyhow::Result<()> {
         }
     }
     println!("\nreal photos, from their own views (fitted; the mask is the pose model's):");
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = Path::new(guava::REPO);
     for photo in ["assets/demo_portrait.png", "tests/data/camera.png"] {
         let path = root.join(photo);
         let outcome = pipeline.reconstruct(

@@ -1,9 +1,22 @@
 //! The headless CLI as a user runs it: `guava info`, `guava render`, and clear errors.
 
+// The library's test helpers (synthetic photos, tracking files).
+#[path = "../../tests/common/mod.rs"]
+mod common;
+
 use std::process::Command;
+
+// Relative paths in these tests are the repository's (tests/data, assets): the command runs
+// there, as a user runs it from a clone.
+
+/// `path` in the repository.
+fn repo(path: &str) -> std::path::PathBuf {
+    std::path::Path::new(guava::REPO).join(path)
+}
 
 fn guava(args: &[&str]) -> (bool, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_guava"))
+        .current_dir(guava::REPO)
         .args(args)
         .output()
         .expect("guava runs");
@@ -38,6 +51,7 @@ fn info_reports_adapter_and_onnx_runtime() {
 #[test]
 fn info_is_quiet_without_a_wayland_session() {
     let out = Command::new(env!("CARGO_BIN_EXE_guava"))
+        .current_dir(guava::REPO)
         .arg("info")
         .env_remove("XDG_RUNTIME_DIR")
         .env_remove("NODEVICE_SELECT")
@@ -53,6 +67,7 @@ fn info_is_quiet_without_a_wayland_session() {
 #[test]
 fn a_closed_pipe_is_no_panic() {
     let mut child = Command::new(env!("CARGO_BIN_EXE_guava"))
+        .current_dir(guava::REPO)
         .arg("info")
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
@@ -72,6 +87,7 @@ fn no_adapter_is_one_clear_error() {
         return;
     }
     let out = Command::new(env!("CARGO_BIN_EXE_guava"))
+        .current_dir(guava::REPO)
         .arg("info")
         .env("WGPU_BACKEND", "dx12")
         .output()
@@ -209,7 +225,7 @@ fn fit_writes_tracking_and_takes_a_model_folder() {
     let dir = std::env::temp_dir().join(format!("guava-cli-fit-{}", std::process::id()));
     let models = dir.join("models");
     std::fs::create_dir_all(&models).expect("dir");
-    let portrait = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/demo_portrait.png");
+    let portrait = guava::DEMO_PORTRAIT;
     let out = dir.join("fit.json");
     let out_s = out.to_str().expect("utf-8");
     let models_s = models.to_str().expect("utf-8");
@@ -257,7 +273,7 @@ fn fit_writes_tracking_and_takes_a_model_folder() {
 fn fit_frames_the_person_and_reconstruct_reads_the_frame() {
     let dir = std::env::temp_dir().join(format!("guava-cli-frame-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
-    let photo = crate::common::portrait_placed(&dir, "tall.png", [512, 1024], [0, 0]);
+    let photo = common::portrait_placed(&dir, "tall.png", [512, 1024], [0, 0]);
     let tracking = guava::pipeline::tracking_beside(&photo);
     let (photo_s, tracking_s) = (
         photo.to_str().expect("utf-8"),
@@ -298,8 +314,9 @@ fn fit_frames_the_person_and_reconstruct_reads_the_frame() {
 fn fit_takes_ehm_trackers_keypoint_models() {
     let dir = std::env::temp_dir().join(format!("guava-cli-dwpose-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
-    let portrait = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/demo_portrait.png");
-    let stand_in = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/dwpose_oracle");
+    let portrait = guava::DEMO_PORTRAIT;
+    let stand_in = repo("tests/data/dwpose_oracle");
+    let stand_in = stand_in.to_str().expect("utf-8");
     let out = dir.join("fit.json");
     let out_s = out.to_str().expect("utf-8");
     let fit = |models: &str| {
@@ -331,8 +348,8 @@ fn reconstruct_in_guava_mode_with_exported_networks() {
     let dir = std::env::temp_dir().join(format!("guava-cli-guava-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let ehm = "tests/data/ehm_synthetic.npz";
-    let body = EhmModel::load(std::path::Path::new(ehm)).expect("synthetic EHM");
-    let tracking = crate::common::ehm_rest_tracking(None);
+    let body = EhmModel::load(&repo(ehm)).expect("synthetic EHM");
+    let tracking = common::ehm_rest_tracking(None);
     let (photo, track, out) = (dir.join("p.png"), dir.join("p.json"), dir.join("p.guava"));
     tracking.save(&track).expect("tracking");
     image::RgbaImage::from_pixel(200, 200, image::Rgba([180, 120, 90, 255]))
@@ -420,7 +437,7 @@ fn guava_mode_fits_photos_without_tracking() {
     std::fs::create_dir_all(&dir).expect("temp dir");
     let ehm = "tests/data/ehm_synthetic.npz";
     let photo = dir.join("portrait.png");
-    std::fs::copy("assets/demo_portrait.png", &photo).expect("copy");
+    std::fs::copy(guava::DEMO_PORTRAIT, &photo).expect("copy");
     let (track, out) = (dir.join("fitted.json"), dir.join("portrait.guava"));
     let path = |p: &std::path::Path| p.display().to_string();
     let (photo_s, track_s, out_s) = (path(&photo), path(&track), path(&out));
@@ -514,10 +531,7 @@ fn eval_prints_the_metrics_of_a_known_answer() {
     let written = image::open(&side).expect("side by side").to_rgb8();
     assert_eq!(written.dimensions(), (3 * 512, 512));
     // With an LPIPS model (the tiny random test one: the plumbing, not the metric) a value more.
-    let lpips = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/lpips/tiny_lpips.onnx"
-    );
+    let lpips = "tests/data/lpips/tiny_lpips.onnx";
     let (ok, stdout, stderr) = guava(&[&args[..5], &["--lpips", lpips]].concat());
     assert!(ok, "{stderr}");
     let d: f64 = stdout

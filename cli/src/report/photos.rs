@@ -19,7 +19,7 @@ pub fn run(
     uv_sides: &[u32],
     quick: bool,
 ) -> Result<Table> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = Path::new(guava::REPO);
     let photos: &[&str] = if quick {
         &["assets/demo_portrait.png"]
     } else {

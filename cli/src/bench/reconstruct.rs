@@ -145,7 +145,7 @@ fn framing_cost(iterations: usize) -> anyhow::Result<()> {
     std::fs::create_dir_all(&dir)?;
     let mut photos = vec![(
         "demo portrait 512² (kept)".to_string(),
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png"),
+        std::path::PathBuf::from(guava::DEMO_PORTRAIT),
     )];
     for (name, size, at) in [
         ("portrait at the left of 1024×512", [1024, 512], [0, 0]),
@@ -184,7 +184,7 @@ fn framing_cost(iterations: usize) -> anyhow::Result<()> {
 /// EHM-Tracker's models (ONNX Runtime, its default CPU threads) on the demo portrait: people,
 /// then DWPose in each person's crop, with their OpenCV-exact preparation and decoding.
 fn wholebody_on_demo_portrait(dir: &std::path::Path, iterations: usize) -> anyhow::Result<()> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png");
+    let path = std::path::PathBuf::from(guava::DEMO_PORTRAIT);
     let source = SourceImage::load(&path)?;
     let mut models = Wholebody::load_dir(OnnxRuntime::load()?, dir)?;
     let mut times = Vec::new();
@@ -207,7 +207,7 @@ fn wholebody_on_demo_portrait(dir: &std::path::Path, iterations: usize) -> anyho
 
 /// Keypoints (ONNX Runtime, its default CPU threads) and the fit (one thread) on the demo portrait.
 fn fit_demo_portrait(body: &BodyModel, iterations: usize) -> anyhow::Result<()> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo_portrait.png");
+    let path = std::path::PathBuf::from(guava::DEMO_PORTRAIT);
     let source = SourceImage::load(&path)?;
     let mut models = Landmarkers::load(OnnxRuntime::load()?)?;
     let (mut keypoint_ms, mut embed_ms, mut fit_ms) = (Vec::new(), Vec::new(), Vec::new());
