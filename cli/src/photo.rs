@@ -4,10 +4,11 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use guava::body::BodyRef;
 use guava::body::{BodyModel, BodyPose, EhmModel};
 use guava::guava_mode::GuavaModels;
 use guava::pipeline::{
-    FitBody, Framing, KeypointModels, Mode, Photo, Pipeline, Tracked, fit_lines, tracking_beside,
+    Framing, KeypointModels, Mode, Photo, Pipeline, Tracked, fit_lines, tracking_beside,
 };
 use guava::tracking::SourceView;
 
@@ -110,11 +111,11 @@ pub fn fit(
     let (body, framing) = match ehm {
         Some(path) => {
             ehm_body = EhmModel::load(path)?;
-            (FitBody::Ehm(&ehm_body), Framing::AroundPerson)
+            (BodyRef::Ehm(&ehm_body), Framing::AroundPerson)
         }
         None => {
             template = BodyModel::default_body()?;
-            (FitBody::Template(&template), Framing::KeepCentred)
+            (BodyRef::Template(&template), Framing::KeepCentred)
         }
     };
     let source = pipeline.source(body, Photo::File(image), Tracked::Fit, framing, &mut |_| {
@@ -132,8 +133,8 @@ pub fn fit(
     let fitted =
         |body: &str| format!("fitted by guava fit to {name}: {points} keypoints{face}, {body}");
     let tracking = match body {
-        FitBody::Ehm(b) => source.view.to_tracking(b, &fitted(&b.name)),
-        FitBody::Template(b) => source.view.to_tracking(b, &fitted("default body")),
+        BodyRef::Ehm(b) => source.view.to_tracking(b, &fitted(&b.name)),
+        BodyRef::Template(b) => source.view.to_tracking(b, &fitted("default body")),
     };
     tracking.save(out)?;
     let framed = match source.view.crop {

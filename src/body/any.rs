@@ -14,7 +14,22 @@ pub enum AnyBody {
     Ehm(Box<EhmModel>),
 }
 
+/// [`AnyBody`] borrowed: made from it, or from bodies held elsewhere (a reconstruction's mode,
+/// a tracker's template). What a photo's view is fitted on.
+#[derive(Clone, Copy)]
+pub enum BodyRef<'a> {
+    Template(&'a BodyModel),
+    Ehm(&'a EhmModel),
+}
+
 impl AnyBody {
+    pub fn borrowed(&self) -> BodyRef<'_> {
+        match self {
+            Self::Template(m) => BodyRef::Template(m),
+            Self::Ehm(m) => BodyRef::Ehm(m),
+        }
+    }
+
     /// The body template, where the feature needs one (default reconstruction, the fit).
     pub fn template(&self) -> Option<&BodyModel> {
         match self {

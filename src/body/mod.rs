@@ -23,7 +23,7 @@ mod normals;
 mod points;
 mod pose;
 
-pub use any::AnyBody;
+pub use any::{AnyBody, BodyRef};
 pub use ehm::{
     EHM_FORMAT, EhmExtras, EhmIdentity, EhmModel, EhmParams, LINEAR_COMPONENTS, ReferenceTexels,
     Skinned,

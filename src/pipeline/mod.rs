@@ -23,7 +23,7 @@ use std::sync::Arc;
 use image::RgbaImage;
 
 use crate::avatar::Avatar;
-use crate::body::{BodyModel, EhmIdentity, EhmModel, Posable};
+use crate::body::{BodyModel, BodyRef, EhmIdentity, EhmModel, Posable};
 use crate::fit::{FitError, fit_detections, fit_ehm_detections, fit_silhouette};
 use crate::guava_mode::{GuavaModels, reconstruct_guava, uv_map};
 use crate::keypoints::{Detections, Landmarkers};
@@ -43,18 +43,11 @@ pub enum Mode<'a> {
     },
 }
 
-/// The body a photo's view is fitted on.
-#[derive(Clone, Copy)]
-pub enum FitBody<'a> {
-    Template(&'a BodyModel),
-    Ehm(&'a EhmModel),
-}
-
 impl<'a> Mode<'a> {
-    fn fit_body(&self) -> FitBody<'_> {
+    fn fit_body(&self) -> BodyRef<'_> {
         match self {
-            Mode::Default(body) => FitBody::Template(body),
-            Mode::Guava { body, .. } => FitBody::Ehm(body),
+            Mode::Default(body) => BodyRef::Template(body),
+            Mode::Guava { body, .. } => BodyRef::Ehm(body),
         }
     }
 }
@@ -194,7 +187,7 @@ impl Pipeline {
     /// do not load, the report says so and the mask is left to the caller.
     pub fn source(
         &mut self,
-        body: FitBody,
+        body: BodyRef,
         photo: Photo,
         tracked: Tracked,
         framing: Framing,
@@ -208,8 +201,8 @@ impl Pipeline {
                 let name = path.display().to_string();
                 let tracking = Tracking::load(&path)?;
                 let view = match body {
-                    FitBody::Template(b) => SourceView::from_tracking(&tracking, b, &name)?,
-                    FitBody::Ehm(b) => SourceView::from_tracking(&tracking, b, &name)?,
+                    BodyRef::Template(b) => SourceView::from_tracking(&tracking, b, &name)?,
+                    BodyRef::Ehm(b) => SourceView::from_tracking(&tracking, b, &name)?,
                 };
                 // The tracker's skeleton (joint offsets, head and hand scale) is this person's.
                 let identity = tracking
@@ -286,8 +279,8 @@ impl Pipeline {
                     .expect("a fitted photo's keypoints");
                 let face = &mut models.expect("a fit loads the models").face;
                 let (mut view, fit) = match body {
-                    FitBody::Template(b) => fit_detections(b, found, face, SOURCE_SIZE),
-                    FitBody::Ehm(b) => fit_ehm_detections(b, found, face, SOURCE_SIZE),
+                    BodyRef::Template(b) => fit_detections(b, found, face, SOURCE_SIZE),
+                    BodyRef::Ehm(b) => fit_ehm_detections(b, found, face, SOURCE_SIZE),
                 }
                 .map_err(|e| fit_error(&file, e))?;
                 view.crop = read.crop;
@@ -298,7 +291,7 @@ impl Pipeline {
                     (None, Some(d)) => Some(d.person_mask(read.image.size as usize)),
                     (None, None) => None,
                 };
-                if let (FitBody::Template(b), Some(mask)) = (body, mask) {
+                if let (BodyRef::Template(b), Some(mask)) = (body, mask) {
                     clock.start(Stage::Silhouette, progress)?;
                     let (fitted, silhouette) =
                         fit_silhouette(b, &view, &fit, &mask, read.image.size);

@@ -23,11 +23,12 @@ pub use solve::Solver;
 
 use std::time::{Duration, Instant};
 
+use crate::body::BodyRef;
 use crate::body::{BodyModel, HEAD_SIZE};
 use crate::fit::{FaceEmbedding, FitState, embed_face};
 use crate::keypoints::Detections;
 use crate::photo::{Crop, SOURCE_SIZE, SourceImage};
-use crate::pipeline::{FitBody, Framing, Photo, Pipeline, Tracked};
+use crate::pipeline::{Framing, Photo, Pipeline, Tracked};
 use crate::progress::Stage;
 use crate::reconstruct::ReconstructError;
 use crate::tracking::{Frame, SourceView, Tracking};
@@ -148,7 +149,7 @@ impl Seer {
             has_alpha: false,
         };
         let source = match pipeline.source(
-            FitBody::Template(body),
+            BodyRef::Template(body),
             photo,
             Tracked::Fit,
             Framing::KeepCentred,
