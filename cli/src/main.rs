@@ -199,6 +199,8 @@ enum Command {
 enum PairSplit {
     Train,
     HeldOut,
+    /// Held-out seeds on bodies of shapes the training never saw, in unseen poses only.
+    UnseenBodies,
 }
 
 #[derive(Subcommand)]
@@ -276,6 +278,7 @@ fn run(cli: Cli) -> Result<()> {
             match split {
                 PairSplit::Train => guava::eval::pairs::Split::Train,
                 PairSplit::HeldOut => guava::eval::pairs::Split::HeldOut,
+                PairSplit::UnseenBodies => guava::eval::pairs::Split::UnseenBodies,
             },
         ),
         Command::Reconstruct {

@@ -6,14 +6,17 @@
 //!
 //! Training and held-out pairs share nothing: held-out subjects have their own seeds, are seen
 //! from yaws the training never uses (±30°, ±60°) and in poses from the demo motion's second half
-//! (training poses come from its first half).
+//! (training poses come from its first half). Those are new textures on the four training
+//! bodies, and a third of their views are the rest pose; [`Split::UnseenBodies`] holds out the
+//! body too (shapes the training never saw: heavier and shorter, taller with other proportions)
+//! and shows it only in poses from the motion's second half.
 
 use glam::Vec3;
 
-use crate::body::{BodyModel, BodyPose};
+use crate::body::{BodyModel, BodyPose, Posable, PoseError};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
 use crate::eval::metrics::{Metrics, compare, person_box};
-use crate::eval::subjects::{SubjectError, reconstruct_subject};
+use crate::eval::subjects::{SubjectError, reconstruct_subject_as};
 use crate::eval::{interleaved_rgb, render_view};
 use crate::pipeline::Pipeline;
 use crate::render::{HeadlessRenderer, SplatImage};
@@ -27,6 +30,8 @@ pub const SIDE: u32 = 256;
 pub enum Split {
     Train,
     HeldOut,
+    /// Held-out seeds on bodies of unseen shape, in unseen poses only.
+    UnseenBodies,
 }
 
 /// One view of an avatar: yaw and pitch around the chest (degrees), a zoom (1 frames the upper
@@ -45,6 +50,9 @@ pub struct AvatarSpec {
     pub kind: usize,
     pub seed: u64,
     pub views: Vec<View>,
+    /// The body's shape: morph targets of the default body and their coefficients (none: its
+    /// default phenotype, as in training).
+    pub shape: Vec<(&'static str, f32)>,
 }
 
 /// The four subject kinds, by index.
@@ -92,7 +100,12 @@ pub fn specs(split: Split) -> Vec<AvatarSpec> {
                             },
                         })
                         .collect();
-                    out.push(AvatarSpec { kind, seed, views });
+                    out.push(AvatarSpec {
+                        kind,
+                        seed,
+                        views,
+                        shape: Vec::new(),
+                    });
                 }
             }
         }
@@ -110,12 +123,65 @@ pub fn specs(split: Split) -> Vec<AvatarSpec> {
                             });
                         }
                     }
-                    out.push(AvatarSpec { kind, seed, views });
+                    out.push(AvatarSpec {
+                        kind,
+                        seed,
+                        views,
+                        shape: Vec::new(),
+                    });
+                }
+            }
+        }
+        Split::UnseenBodies => {
+            let shapes: [Vec<(&'static str, f32)>; 2] = [
+                vec![
+                    ("weight_max", 0.8),
+                    ("muscle_max", 0.4),
+                    ("height_min", 0.6),
+                ],
+                vec![
+                    ("height_max", 0.7),
+                    ("proportions_max", 0.9),
+                    ("gender_max", 0.5),
+                ],
+            ];
+            for (seed, shape) in [2001u64, 2002].into_iter().zip(shapes) {
+                for kind in 0..KINDS.len() {
+                    let mut views = Vec::new();
+                    for yaw in [30.0, -30.0, 60.0, -60.0] {
+                        for time in [6.45, 5.2, 7.3] {
+                            views.push(View {
+                                yaw,
+                                pitch: 0.0,
+                                zoom: 1.0,
+                                time: Some(time),
+                            });
+                        }
+                    }
+                    out.push(AvatarSpec {
+                        kind,
+                        seed,
+                        views,
+                        shape: shape.clone(),
+                    });
                 }
             }
         }
     }
     out
+}
+
+/// The rest pose of `spec`'s body: its shape coefficients set.
+fn rest_of(body: &BodyModel, spec: &AvatarSpec) -> Result<BodyPose, PoseError> {
+    let mut rest = BodyPose::rest(body);
+    for &(name, value) in &spec.shape {
+        let i = body
+            .parameter_names()
+            .position(|n| n == name)
+            .ok_or_else(|| PoseError::UnknownParameter(name.into()))?;
+        rest.coefficients[i] = value;
+    }
+    Ok(rest)
 }
 
 /// A refiner pair: what the splatting pass gives, and the truth.
@@ -198,8 +264,8 @@ pub fn make(
 ) -> Result<(), SubjectError> {
     let subject = subject(spec.kind, body);
     let texture = seeded_texture(spec.seed);
-    let rest = BodyPose::rest(body);
-    let outcome = reconstruct_subject(pipeline, &subject, &texture)?;
+    let rest = rest_of(body, spec)?;
+    let outcome = reconstruct_subject_as(pipeline, &subject, &texture, rest.clone())?;
     let motion = demo_motion()?;
     let retarget = Retarget::new(&motion, body);
     for view in &spec.views {

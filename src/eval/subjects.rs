@@ -47,9 +47,20 @@ pub fn reconstruct_subject(
     subject: &Subject,
     texture: impl Fn(Vec3, Material) -> [f32; 3],
 ) -> Result<Outcome, SubjectError> {
+    reconstruct_subject_as(pipeline, subject, texture, BodyPose::rest(subject.body))
+}
+
+/// [`reconstruct_subject`] with the body's shape given: photographed in `rest` (the rest pose
+/// with shape coefficients).
+pub fn reconstruct_subject_as(
+    pipeline: &mut Pipeline,
+    subject: &Subject,
+    texture: impl Fn(Vec3, Material) -> [f32; 3],
+    rest: BodyPose,
+) -> Result<Outcome, SubjectError> {
     let body: &BodyModel = subject.body;
     let view = SourceView {
-        pose: BodyPose::rest(body),
+        pose: rest,
         camera: upper_body_camera(body, 0.0),
         crop: None,
     };

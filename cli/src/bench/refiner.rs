@@ -97,11 +97,37 @@ pub fn refiner(args: &RefinerBenchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Raw and refined against the truth on the held-out pairs, per subject kind.
+/// Raw and refined against the truth on the held-out pairs, per subject kind: new textures on
+/// the training bodies, then unseen bodies in unseen poses only.
 fn held_out(refiner: &mut Refiner, renderer: &mut HeadlessRenderer) -> anyhow::Result<()> {
     let body = BodyModel::default_body()?;
     let mut pipeline = Pipeline::default();
-    println!("held-out pairs (seeds, yaws ±30°/±60° and poses not trained on), mean per pair:");
+    for (split, what) in [
+        (
+            Split::HeldOut,
+            "held-out pairs (seeds, yaws ±30°/±60° and poses not trained on; the training's \
+             bodies, a third in the rest pose)",
+        ),
+        (
+            Split::UnseenBodies,
+            "unseen bodies (shapes not trained on: heavier and shorter, taller with other \
+             proportions; held-out seeds and yaws; poses from the motion's second half only)",
+        ),
+    ] {
+        println!("{what}, mean per pair:");
+        split_table(refiner, renderer, &mut pipeline, &body, split)?;
+        println!();
+    }
+    Ok(())
+}
+
+fn split_table(
+    refiner: &mut Refiner,
+    renderer: &mut HeadlessRenderer,
+    pipeline: &mut Pipeline,
+    body: &BodyModel,
+    split: Split,
+) -> anyhow::Result<()> {
     println!(
         "{:<20} {:>5} {:>8} {:>8} {:>7} {:>8} {:>8} {:>8} {:>8}",
         "subject",
@@ -117,8 +143,8 @@ fn held_out(refiner: &mut Refiner, renderer: &mut HeadlessRenderer) -> anyhow::R
     let mut per_kind: Vec<Sums> = KINDS.iter().map(|_| Sums::default()).collect();
     let mut all = Sums::default();
     let mut failed = None;
-    for spec in pairs::specs(Split::HeldOut) {
-        pairs::make(renderer, &mut pipeline, &body, &spec, &mut |_, pair| {
+    for spec in pairs::specs(split) {
+        pairs::make(renderer, pipeline, body, &spec, &mut |_, pair| {
             let refined = match refiner.refine(&pair.input) {
                 Ok(r) => r,
                 Err(e) => return failed = Some(e),
@@ -136,7 +162,6 @@ fn held_out(refiner: &mut Refiner, renderer: &mut HeadlessRenderer) -> anyhow::R
         sums.row(kind);
     }
     all.row("all");
-
     Ok(())
 }
 
