@@ -111,26 +111,12 @@ pub(crate) struct Interaction {
 
 pub struct GuavaApp {
     pub(crate) options: Options,
-    pub(crate) scene: Option<Scene>,
-    pub(crate) body: Option<BodyState>,
-    pub(crate) avatar: Option<AvatarState>,
-    /// The motion driving the body (the demo motion until another is opened).
-    pub(crate) motion: Option<Motion>,
+    /// What is open: the splat scene, the body, the avatar, the motion, the networks.
+    pub(crate) doc: Document,
+    /// How it is looked at: which view, the camera, the display, a split.
+    pub(crate) viewing: Viewing,
     /// A video or webcam driving the body live (the motion waits meanwhile).
     pub(crate) drive: Option<crate::drive::Drive>,
-    /// GUAVA's networks, once the user opened their folder (GUAVA mode with an EHM body).
-    pub(crate) networks: Option<Networks>,
-    /// EHM-Tracker's keypoint models folder, once the user chose it: its DWPose places the body
-    /// and hand points when photos are fitted.
-    pub(crate) dwpose: Option<PathBuf>,
-    /// Photo → avatar (keypoint models and the UV map kept between photos), shared with jobs.
-    pub(crate) pipeline: Arc<Mutex<Pipeline>>,
-    pub(crate) view: View,
-    pub(crate) orbit: OrbitCamera,
-    pub(crate) camera_mode: CameraMode,
-    /// The camera path keyed by hand (camera mode *keys*, sequence exports).
-    pub(crate) camera_keys: crate::camera_keys::CameraKeys,
-    pub(crate) display: Display,
     /// The refiner pass, run when the view settles.
     pub(crate) refined: RefinedView,
     /// The export window's settings.
@@ -139,14 +125,8 @@ pub struct GuavaApp {
     pub(crate) recent: Vec<PathBuf>,
     /// Whether the help window (shortcuts, mouse) is open.
     pub(crate) help: bool,
-    /// A split between two views, and the mesh over the avatar.
-    pub(crate) views: crate::compare::Views,
-    /// Whether the avatar's photo is shown beside it in the viewport.
-    pub(crate) display_photo_beside: bool,
     /// The last `guava report`'s plot, read when its section is first opened.
     pub(crate) report_plot: Option<crate::report_plot::ReportPlot>,
-    pub(crate) background: [f32; 3],
-    pub(crate) interaction: Interaction,
     pub(crate) report: Arc<Mutex<ViewReport>>,
     pub(crate) job: Option<Job>,
     /// Files waiting to open once the current job is done (several dropped at once).
@@ -155,6 +135,39 @@ pub struct GuavaApp {
     pub(crate) status: Option<(String, bool)>,
     pub(crate) gpu: Gpu,
     pub(crate) clock: FrameClock,
+}
+
+/// What is open in the viewer: what jobs load into and every view draws.
+#[derive(Default)]
+pub(crate) struct Document {
+    pub scene: Option<Scene>,
+    pub body: Option<BodyState>,
+    pub avatar: Option<AvatarState>,
+    /// The motion driving the body (the demo motion until another is opened).
+    pub motion: Option<Motion>,
+    /// GUAVA's networks, once the user opened their folder (GUAVA mode with an EHM body).
+    pub networks: Option<Networks>,
+    /// EHM-Tracker's keypoint models folder, once the user chose it: its DWPose places the body
+    /// and hand points when photos are fitted.
+    pub dwpose: Option<PathBuf>,
+    /// Photo → avatar (keypoint models and the UV map kept between photos), shared with jobs.
+    pub pipeline: Arc<Mutex<Pipeline>>,
+}
+
+/// How the document is looked at: none of it changes what is open.
+pub(crate) struct Viewing {
+    pub view: View,
+    pub orbit: OrbitCamera,
+    pub camera_mode: CameraMode,
+    /// The camera path keyed by hand (camera mode *keys*, sequence exports).
+    pub camera_keys: crate::camera_keys::CameraKeys,
+    pub display: Display,
+    /// A split between two views, and the mesh over the avatar.
+    pub views: crate::compare::Views,
+    /// Whether the avatar's photo is shown beside it in the viewport.
+    pub display_photo_beside: bool,
+    pub background: [f32; 3],
+    pub interaction: Interaction,
 }
 
 /// The UI's own frame timing, and the scripted exit.
@@ -208,32 +221,28 @@ impl GuavaApp {
         };
         let mut app = Self {
             options: options.clone(),
-            scene: None,
-            body: None,
-            avatar: None,
-            motion: None,
+            doc: Document::default(),
+            viewing: Viewing {
+                view: View::Body,
+                orbit: OrbitCamera::default(),
+                camera_mode: CameraMode::Orbit,
+                camera_keys: Default::default(),
+                display: Display::default(),
+                views: Default::default(),
+                display_photo_beside: false,
+                background: [0.0; 3],
+                // A software adapter cannot splat the full viewport at interactive rates.
+                interaction: Interaction {
+                    scale: if gpu.cpu { 0.5 } else { 1.0 },
+                    active: false,
+                },
+            },
             drive: None,
-            networks: None,
-            dwpose: None,
-            pipeline: Arc::default(),
-            view: View::Body,
-            orbit: OrbitCamera::default(),
-            camera_mode: CameraMode::Orbit,
-            camera_keys: Default::default(),
-            display: Display::default(),
             refined: RefinedView::default(),
             export: Default::default(),
             recent: Vec::new(),
             help: false,
-            views: Default::default(),
-            display_photo_beside: false,
             report_plot: None,
-            background: [0.0; 3],
-            // A software adapter cannot splat the full viewport at interactive rates.
-            interaction: Interaction {
-                scale: if gpu.cpu { 0.5 } else { 1.0 },
-                active: false,
-            },
             gpu,
             report: Arc::default(),
             job: None,
@@ -264,36 +273,39 @@ impl GuavaApp {
     }
 
     pub fn motion(&self) -> Option<&Motion> {
-        self.motion.as_ref()
+        self.doc.motion.as_ref()
     }
 
     pub fn motion_mut(&mut self) -> Option<&mut Motion> {
-        self.motion.as_mut()
+        self.doc.motion.as_mut()
     }
 
     /// The body panel's description of the current body (its source and model name).
     pub fn body_label(&self) -> Option<&str> {
-        self.body.as_ref().map(|b| b.label.as_str())
+        self.doc.body.as_ref().map(|b| b.label.as_str())
     }
 
     pub fn body_mut(&mut self) -> Option<&mut BodyState> {
-        self.body.as_mut()
+        self.doc.body.as_mut()
     }
 
     /// The avatar panel's description (its kind and source) and its Gaussian count.
     pub fn avatar_info(&self) -> Option<(&str, usize)> {
-        self.avatar.as_ref().map(|a| (a.label.as_str(), a.drawn()))
+        self.doc
+            .avatar
+            .as_ref()
+            .map(|a| (a.label.as_str(), a.drawn()))
     }
 
     /// The view the avatar was made from (its photo's pose and camera), when it keeps one.
     pub fn avatar_source_view(&self) -> Option<&guava::tracking::SourceView> {
-        self.avatar.as_ref()?.avatar.source_view.as_ref()
+        self.doc.avatar.as_ref()?.avatar.source_view.as_ref()
     }
 
     /// How the avatar compares with its photo from the photo's camera (and how the previous
     /// avatar of the same photo did), or why it was not compared; `None` for avatars not made here.
     pub fn avatar_fidelity(&self) -> Option<Result<(Metrics, Option<Metrics>), &str>> {
-        let fidelity = self.avatar.as_ref()?.fidelity.as_ref()?;
+        let fidelity = self.doc.avatar.as_ref()?.fidelity.as_ref()?;
         Some(match fidelity {
             Ok(f) => Ok((f.metrics, f.before)),
             Err(e) => Err(e.as_str()),
@@ -301,7 +313,7 @@ impl GuavaApp {
     }
 
     pub fn scene_len(&self) -> Option<usize> {
-        self.scene.as_ref().map(|s| s.cloud.len())
+        self.doc.scene.as_ref().map(|s| s.cloud.len())
     }
 
     /// Whether a file is loading or waiting to load.
@@ -314,25 +326,25 @@ impl GuavaApp {
     }
 
     pub fn view(&self) -> View {
-        self.view
+        self.viewing.view
     }
 
     /// Switches the viewport and frames what it now shows.
     pub fn set_view(&mut self, view: View) {
-        if self.view != view {
-            self.view = view;
+        if self.viewing.view != view {
+            self.viewing.view = view;
             self.reset_camera();
         }
     }
 
     pub fn camera_mode(&self) -> CameraMode {
-        self.camera_mode
+        self.viewing.camera_mode
     }
 
     /// Looks through the orbit, the source photo's or the motion's tracked camera (the panel's
     /// choice); a camera the current content lacks falls back to the orbit.
     pub fn set_camera_mode(&mut self, mode: CameraMode) {
-        self.camera_mode = mode;
+        self.viewing.camera_mode = mode;
     }
 
     /// Takes what an earlier run remembered (the look, exports, recent files).
@@ -358,13 +370,13 @@ impl GuavaApp {
 
     /// The orbit camera (what dragging, the camera panel and its presets move).
     pub fn orbit_mut(&mut self) -> &mut crate::orbit::OrbitCamera {
-        self.camera_mode = CameraMode::Orbit;
-        &mut self.orbit
+        self.viewing.camera_mode = CameraMode::Orbit;
+        &mut self.viewing.orbit
     }
 
     /// Turns the orbit camera (what dragging or the yaw slider does).
     pub fn set_yaw_deg(&mut self, yaw: f32) {
-        self.orbit.yaw_rad = yaw.to_radians();
+        self.viewing.orbit.yaw_rad = yaw.to_radians();
     }
 
     /// What the viewport last reported: counters, renders, the size it drew at.
@@ -390,31 +402,31 @@ impl GuavaApp {
 
     /// Shows the avatar's photo beside it in the viewport (where it was made here).
     pub fn set_photo_beside(&mut self, beside: bool) {
-        self.display_photo_beside = beside;
+        self.viewing.display_photo_beside = beside;
     }
 
     /// The camera path keyed by hand.
     pub fn camera_keys_mut(&mut self) -> &mut crate::camera_keys::CameraKeys {
-        &mut self.camera_keys
+        &mut self.viewing.camera_keys
     }
 
     /// The timeline's time (0 without a motion).
     pub fn time(&self) -> f64 {
-        self.motion.as_ref().map_or(0.0, |m| m.player.time())
+        self.doc.motion.as_ref().map_or(0.0, |m| m.player.time())
     }
 
     /// Two views side by side (`None`: one view, as the display panel sets it).
     pub fn set_compare(&mut self, compare: Option<crate::compare::Compare>) {
-        self.views.compare = compare;
+        self.viewing.views.compare = compare;
     }
 
     pub fn compare(&self) -> Option<crate::compare::Compare> {
-        self.views.compare
+        self.viewing.views.compare
     }
 
     /// The body's mesh over the avatar at an opacity (`None`: off).
     pub fn set_mesh_over(&mut self, opacity: Option<f32>) {
-        self.views.mesh_over = opacity;
+        self.viewing.views.mesh_over = opacity;
     }
 
     pub fn report(&self) -> ViewReport {
@@ -423,7 +435,8 @@ impl GuavaApp {
 
     /// Whether the body sliders are posing the source photo's body (the fit edited by hand).
     pub fn editing_fit(&self) -> bool {
-        self.avatar
+        self.doc
+            .avatar
             .as_ref()
             .and_then(|a| a.source.as_ref())
             .is_some_and(SourcePreview::editing)
@@ -452,7 +465,7 @@ impl GuavaApp {
             if let Some(video) = self.options.drive.take() {
                 self.drive_from(crate::drive::DriveSource::File(video));
             }
-            if let Some(a) = &self.avatar {
+            if let Some(a) = &self.doc.avatar {
                 // The real-window test waits for this line to photograph the avatar.
                 println!("guava-viewer: showing {}", a.avatar.source);
             }
@@ -494,14 +507,16 @@ impl GuavaApp {
     /// hand (then the body holds the photo's pose).
     fn advance_motion(&mut self, ctx: &egui::Context) {
         let editing = self.editing_fit();
-        if let (Some(drive), Some(body), false) = (&mut self.drive, &mut self.body, editing) {
+        if let (Some(drive), Some(body), false) = (&mut self.drive, &mut self.doc.body, editing) {
             drive.update(body.model.as_ref(), &mut body.pose);
             if drive.running() {
                 ctx.request_repaint();
             }
             return;
         }
-        if let (Some(motion), Some(body), false) = (&mut self.motion, &mut self.body, editing) {
+        if let (Some(motion), Some(body), false) =
+            (&mut self.doc.motion, &mut self.doc.body, editing)
+        {
             let dt = ctx.input(|i| i.unstable_dt) as f64;
             motion.update(dt, &mut body.pose);
             if motion.is_playing() {
@@ -560,7 +575,8 @@ impl eframe::App for GuavaApp {
 
         egui::Panel::top("menu").show(ui, |ui| self.menu_ui(ui));
         egui::Panel::bottom("status").show(ui, |ui| self.status_ui(ui));
-        if let (Some(motion), View::Body | View::Avatar) = (&mut self.motion, self.view) {
+        if let (Some(motion), View::Body | View::Avatar) = (&mut self.doc.motion, self.viewing.view)
+        {
             egui::Panel::bottom("timeline").show(ui, |ui| motion.timeline_ui(ui));
         }
         egui::Panel::left("scene").resizable(true).show(ui, |ui| {

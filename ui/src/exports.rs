@@ -132,7 +132,8 @@ impl GuavaApp {
             .offscreen
             .clone()
             .ok_or("no GPU device for exports")?;
-        let (Some(avatar), Some(body), View::Avatar) = (&self.avatar, &mut self.body, self.view)
+        let (Some(avatar), Some(body), View::Avatar) =
+            (&self.doc.avatar, &mut self.doc.body, self.viewing.view)
         else {
             return Err("exports draw the avatar: show one first".into());
         };
@@ -140,7 +141,7 @@ impl GuavaApp {
             .refined
             .enabled
             .then(|| {
-                let networks = self.networks.as_ref().map(|n| n.dir.as_path());
+                let networks = self.doc.networks.as_ref().map(|n| n.dir.as_path());
                 guava::refine::refiner_for(avatar.avatar.kind, networks).ok()
             })
             .flatten()
@@ -155,7 +156,7 @@ impl GuavaApp {
             offscreen,
             avatar: avatar.reference(body),
             outside: avatar.show_outside,
-            background: self.background,
+            background: self.viewing.background,
             refiner,
         })
     }
@@ -184,7 +185,7 @@ impl GuavaApp {
             Ok(s) => s,
             Err(e) => return self.error(e),
         };
-        let pose = self.body.as_mut().expect("shot checked").posed();
+        let pose = self.doc.body.as_mut().expect("shot checked").posed();
         self.start_export(&out.clone(), move |context| {
             context.set_stage(format!("drawing {w}×{h}"));
             let image = shot.draw(&pose, &camera)?;
@@ -203,17 +204,19 @@ impl GuavaApp {
             Ok(s) => s,
             Err(e) => return self.error(e),
         };
-        let body = self.body.as_ref().expect("shot checked");
+        let body = self.doc.body.as_ref().expect("shot checked");
         let posing = Posing {
             model: body.model.clone(),
             base: body.pose.clone(),
             controls: body.controls.clone(),
-            motion: self.motion.as_ref().map(|m| m.sampler()),
+            motion: self.doc.motion.as_ref().map(|m| m.sampler()),
         };
-        if path == CameraPath::Tracked && self.motion.as_ref().and_then(|m| m.camera()).is_none() {
+        if path == CameraPath::Tracked
+            && self.doc.motion.as_ref().and_then(|m| m.camera()).is_none()
+        {
             return self.error("the tracked camera path needs a motion with cameras".into());
         }
-        if path == CameraPath::Keys && self.camera_keys.is_empty() {
+        if path == CameraPath::Keys && self.viewing.camera_keys.is_empty() {
             return self.error("the keyed camera path has no keys (Camera > Camera path)".into());
         }
         let times = match &posing.motion {
@@ -221,8 +224,8 @@ impl GuavaApp {
             None => vec![0.0; (2.0 * fps) as usize],
         };
         let fixed = self.view_camera(w, h);
-        let orbit = self.orbit;
-        let keys = self.camera_keys.clone();
+        let orbit = self.viewing.orbit;
+        let keys = self.viewing.camera_keys.clone();
         let tracking = posing.motion.as_ref().map(|(t, _)| t.clone());
         self.start_export(&dir.clone(), move |context| {
             std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -274,7 +277,7 @@ impl GuavaApp {
 
     /// Writes the avatar as posed now as a 3DGS PLY (y down, as 3DGS files are).
     pub fn export_posed_ply(&mut self, out: &Path) -> Result<(), String> {
-        let (Some(avatar), Some(body)) = (&self.avatar, &mut self.body) else {
+        let (Some(avatar), Some(body)) = (&self.doc.avatar, &mut self.doc.body) else {
             return Err("no avatar to export".into());
         };
         let posed = body.posed();
@@ -299,11 +302,11 @@ impl GuavaApp {
 
     /// Writes the body as posed now as a binary glTF mesh.
     pub fn export_posed_mesh(&mut self, out: &Path) -> Result<(), String> {
-        let Some(body) = &mut self.body else {
+        let Some(body) = &mut self.doc.body else {
             return Err("no body to export".into());
         };
         // The mesh view's posed positions and normals (made once per pose, shared).
-        let mesh = body.frame(self.background);
+        let mesh = body.frame(self.viewing.background);
         guava::body::mesh_export::write_glb(out, &mesh.positions, &mesh.normals, &mesh.triangles)
             .map_err(|e| format!("{}: {e}", out.display()))?;
         self.info(format!(
@@ -318,13 +321,13 @@ impl GuavaApp {
     /// with its texture and expression targets, its splats bound to the skeleton, and the
     /// timeline's motion as the animation.
     pub fn export_animatable(&mut self, out: &Path) -> Result<(), String> {
-        let Some(avatar) = &self.avatar else {
+        let Some(avatar) = &self.doc.avatar else {
             return Err("no avatar to export".into());
         };
-        let Some(model) = self.body.as_ref().and_then(|b| b.model.template()) else {
+        let Some(model) = self.doc.body.as_ref().and_then(|b| b.model.template()) else {
             return Err("the animatable export takes avatars of the default body (GUAVA mode's EHM body is not exported yet)".into());
         };
-        let tracking = self.motion.as_ref().map(|m| m.sampler().0);
+        let tracking = self.doc.motion.as_ref().map(|m| m.sampler().0);
         let written =
             guava::export::export(&avatar.avatar, model, tracking.as_deref(), out, &mut |_| {
                 true
@@ -389,6 +392,7 @@ impl GuavaApp {
             });
         self.export.open = open;
         let stem = self
+            .doc
             .avatar
             .as_ref()
             .and_then(|a| Path::new(&a.avatar.source).file_stem())

@@ -111,7 +111,7 @@ impl GuavaApp {
     /// pipeline (so the next photo does not load them again); once it loads, photos are fitted
     /// with its body and hand points.
     pub(crate) fn open_wholebody(&mut self, dir: PathBuf) {
-        let (worker_dir, pipeline) = (dir.clone(), self.pipeline.clone());
+        let (worker_dir, pipeline) = (dir.clone(), self.doc.pipeline.clone());
         self.job = Some(Job::spawn(
             dir,
             "loading EHM-Tracker's keypoint models",
@@ -139,10 +139,10 @@ impl GuavaApp {
     /// What a photo's reconstruction needs from the app (`None` without a body).
     fn photo_job(&self) -> Option<PhotoJob> {
         Some(PhotoJob {
-            body: self.body.as_ref()?.model.clone(),
-            networks: self.networks.as_ref().map(|n| n.models.clone()),
-            dwpose: self.dwpose.clone(),
-            pipeline: self.pipeline.clone(),
+            body: self.doc.body.as_ref()?.model.clone(),
+            networks: self.doc.networks.as_ref().map(|n| n.models.clone()),
+            dwpose: self.doc.dwpose.clone(),
+            pipeline: self.doc.pipeline.clone(),
             offscreen: self.gpu.offscreen.clone(),
         })
     }
@@ -208,7 +208,7 @@ impl GuavaApp {
                      of fitted photos)",
                     dir.display()
                 ));
-                self.dwpose = Some(dir);
+                self.doc.dwpose = Some(dir);
             }
             Ok(Loaded::Motion(imported)) => {
                 let label = format!("{} — {}", file_name(&path), imported.tracking.source);
@@ -248,14 +248,14 @@ impl GuavaApp {
             source_camera,
             mut fidelity,
         } = loaded;
-        let Some(body) = &mut self.body else {
+        let Some(body) = &mut self.doc.body else {
             return self.error("no body to pose the avatar on".into());
         };
         if let Err(e) = avatar.check_body(&*body.model) {
             return self.error(format!("{}: {e}; the current view is kept", path.display()));
         }
         body.take_identity(&avatar);
-        if let Some(motion) = &mut self.motion {
+        if let Some(motion) = &mut self.doc.motion {
             motion.resample();
         }
         let mut label = format!("{} — {}", avatar.kind.label(), avatar.source);
@@ -271,29 +271,29 @@ impl GuavaApp {
             avatar.channels
         ));
         // Made again from the same photo (the fit adjusted): keep how the last one compared.
-        if let (Some(Ok(new)), Some(old)) = (&mut fidelity, &self.avatar)
+        if let (Some(Ok(new)), Some(old)) = (&mut fidelity, &self.doc.avatar)
             && old.avatar.source == avatar.source
             && let Some(Ok(before)) = &old.fidelity
         {
             new.before = Some(before.metrics);
         }
         // The first launch's demo avatar is seen through its photo's camera, as GUAVA renders.
-        let first_launch = self.options.demo_avatar && self.avatar.is_none();
-        self.avatar = Some(AvatarState::new(
+        let first_launch = self.options.demo_avatar && self.doc.avatar.is_none();
+        self.doc.avatar = Some(AvatarState::new(
             avatar,
             label,
             preview,
             source_camera,
             fidelity,
         ));
-        if let Some(state) = &self.avatar {
+        if let Some(state) = &self.doc.avatar {
             crate::recovery::keep(state.avatar.clone());
         }
-        self.camera_mode = match first_launch && source_camera.is_some() {
+        self.viewing.camera_mode = match first_launch && source_camera.is_some() {
             true => CameraMode::Source,
             false => CameraMode::Orbit,
         };
-        self.view = View::Avatar;
+        self.viewing.view = View::Avatar;
         self.reset_camera();
     }
 
@@ -316,21 +316,25 @@ impl GuavaApp {
     }
 
     fn set_scene(&mut self, name: String, kind: &'static str, cloud: GaussianCloud) {
-        self.orbit = OrbitCamera::framing(&cloud, self.orbit.fov_y_rad);
+        self.viewing.orbit = OrbitCamera::framing(&cloud, self.viewing.orbit.fov_y_rad);
         let channels = cloud.channels as u32;
-        self.display.rgb_channels = self.display.rgb_channels.map(|c| c.min(channels - 1));
+        self.viewing.display.rgb_channels = self
+            .viewing
+            .display
+            .rgb_channels
+            .map(|c| c.min(channels - 1));
         self.info(format!(
             "{name}: {} Gaussians, {} channels",
             cloud.len(),
             cloud.channels
         ));
-        self.scene = Some(Scene {
+        self.doc.scene = Some(Scene {
             name,
             kind,
             cloud: Arc::new(cloud),
             id: next_id(),
         });
-        self.view = View::Gaussians;
+        self.viewing.view = View::Gaussians;
     }
 
     pub fn open_test_scene(&mut self) {
@@ -364,7 +368,7 @@ impl GuavaApp {
                         .into(),
                     imported,
                 );
-                if let Some(motion) = &mut self.motion {
+                if let Some(motion) = &mut self.doc.motion {
                     motion.player.playing = self.options.autoplay;
                     if let Some(t) = self.options.motion_time {
                         motion.player.playing = false;
@@ -378,7 +382,7 @@ impl GuavaApp {
 
     /// Plays `imported` on the current body (there always is one: the default at least).
     fn set_motion(&mut self, label: String, imported: Imported) {
-        let Some(body) = &self.body else {
+        let Some(body) = &self.doc.body else {
             return self.error("no body to play the motion on".into());
         };
         let frames = imported.tracking.frames.len();
@@ -394,8 +398,8 @@ impl GuavaApp {
             "{}: {frames} frames at {fps} fps{notes}",
             motion.label
         ));
-        self.motion = Some(motion);
-        self.view = View::Body;
+        self.doc.motion = Some(motion);
+        self.viewing.view = View::Body;
     }
 
     /// Replaces the posed body (a validated template or EHM) and shows it.
@@ -409,16 +413,16 @@ impl GuavaApp {
             model.name(),
             model.size_label()
         );
-        if let Some(motion) = &mut self.motion {
+        if let Some(motion) = &mut self.doc.motion {
             motion.retarget_to(&model);
         }
-        if let Some(avatar) = &self.avatar
+        if let Some(avatar) = &self.doc.avatar
             && avatar.avatar.check_body(&model).is_err()
         {
-            self.avatar = None;
+            self.doc.avatar = None;
         }
-        self.body = Some(BodyState::new(model, label));
-        self.view = View::Body;
+        self.doc.body = Some(BodyState::new(model, label));
+        self.viewing.view = View::Body;
         self.reset_camera();
     }
 
@@ -435,7 +439,7 @@ impl GuavaApp {
             d.colors
         );
         self.info(label.clone());
-        self.networks = Some(Networks {
+        self.doc.networks = Some(Networks {
             dir: models.dir.clone(),
             models: Arc::new(std::sync::Mutex::new(models)),
             label,
@@ -443,7 +447,9 @@ impl GuavaApp {
     }
 
     pub(crate) fn save_avatar_dialog(&mut self) {
-        let Some(state) = &self.avatar else { return };
+        let Some(state) = &self.doc.avatar else {
+            return;
+        };
         let stem = Path::new(&state.avatar.source)
             .file_stem()
             .map_or_else(|| "avatar".into(), |s| s.to_string_lossy().into_owned());
@@ -461,14 +467,14 @@ impl GuavaApp {
 
     /// Writes the avatar shown to `path` (atomically: the old file stays if this fails).
     pub fn save_avatar(&mut self, path: &Path) -> Result<(), String> {
-        let avatar = &self.avatar.as_ref().ok_or("no avatar to save")?.avatar;
+        let avatar = &self.doc.avatar.as_ref().ok_or("no avatar to save")?.avatar;
         avatar.save(path).map_err(|e| e.to_string())?;
         self.info(format!("saved {}", path.display()));
         Ok(())
     }
 
     pub(crate) fn save_ply_dialog(&mut self) {
-        let Some(scene) = &self.scene else { return };
+        let Some(scene) = &self.doc.scene else { return };
         let Some(path) = rfd::FileDialog::new()
             .add_filter("3DGS PLY", &["ply"])
             .set_file_name(format!("{}.ply", scene.name))

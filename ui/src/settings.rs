@@ -55,12 +55,12 @@ impl Settings {
     pub fn save(app: &GuavaApp, storage: &mut dyn eframe::Storage) {
         let e = &app.export;
         let settings = Self {
-            background: app.background,
+            background: app.viewing.background,
             refine: app.refined.enabled,
             refine_while_interacting: app.refined.while_interacting,
             refiner_on: app.refined.on,
-            interactive_scale: Some(app.interaction.scale),
-            fov_deg: app.orbit.fov_y_rad.to_degrees(),
+            interactive_scale: Some(app.viewing.interaction.scale),
+            fov_deg: app.viewing.orbit.fov_y_rad.to_degrees(),
             export_size: [e.width, e.height],
             export_fps: e.fps,
             export_gif: e.gif,
@@ -74,16 +74,16 @@ impl Settings {
     /// Puts the remembered values on a new app (values out of range are left as they are).
     pub fn apply(self, app: &mut GuavaApp) {
         if self.background.iter().all(|c| (0.0..=1.0).contains(c)) {
-            app.background = self.background;
+            app.viewing.background = self.background;
         }
         app.refined.enabled = self.refine;
         app.refined.while_interacting = self.refine_while_interacting;
         app.refined.on = self.refiner_on;
         if let Some(s) = self.interactive_scale.filter(|s| *s > 0.0 && *s <= 1.0) {
-            app.interaction.scale = s;
+            app.viewing.interaction.scale = s;
         }
         if self.fov_deg > 1.0 && self.fov_deg < 170.0 {
-            app.orbit.fov_y_rad = self.fov_deg.to_radians();
+            app.viewing.orbit.fov_y_rad = self.fov_deg.to_radians();
         }
         let e = &mut app.export;
         let [w, h] = self.export_size;

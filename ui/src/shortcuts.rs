@@ -89,24 +89,24 @@ impl GuavaApp {
     fn run_shortcut(&mut self, action: Action) {
         match action {
             Action::PlayPause => {
-                if let Some(m) = &mut self.motion {
+                if let Some(m) = &mut self.doc.motion {
                     m.toggle_play();
                 }
             }
             Action::Step(n) => {
-                if let Some(m) = &mut self.motion {
+                if let Some(m) = &mut self.doc.motion {
                     m.player.step(n);
                 }
             }
             Action::Frame => {
-                self.camera_mode = CameraMode::Orbit;
+                self.viewing.camera_mode = CameraMode::Orbit;
                 self.reset_camera();
             }
             Action::View(i) => self.set_view_preset(i),
             Action::ToggleRefine => self.refined.enabled = !self.refined.enabled,
             Action::Open => self.open_dialog(),
             Action::Save => self.save_avatar_dialog(),
-            Action::Export => self.export.open = self.avatar.is_some(),
+            Action::Export => self.export.open = self.doc.avatar.is_some(),
             Action::Help => self.help = !self.help,
             Action::Cancel => self.cancel_job(),
         }
@@ -114,9 +114,9 @@ impl GuavaApp {
 
     /// The orbit at one of [`VIEWS`] (front, three-quarter, side, back), level.
     pub(crate) fn set_view_preset(&mut self, i: usize) {
-        self.orbit.yaw_rad = VIEWS[i].1.to_radians();
-        self.orbit.pitch_rad = 0.0;
-        self.camera_mode = CameraMode::Orbit;
+        self.viewing.orbit.yaw_rad = VIEWS[i].1.to_radians();
+        self.viewing.orbit.pitch_rad = 0.0;
+        self.viewing.camera_mode = CameraMode::Orbit;
     }
 
     /// The help window: every shortcut and mouse control.

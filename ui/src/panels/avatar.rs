@@ -13,7 +13,7 @@ use crate::files::file_name;
 
 impl GuavaApp {
     pub(crate) fn avatar_ui(&mut self, ui: &mut egui::Ui) {
-        let Some(avatar) = &mut self.avatar else {
+        let Some(avatar) = &mut self.doc.avatar else {
             return;
         };
         ui.heading("Avatar");
@@ -39,7 +39,7 @@ impl GuavaApp {
             );
         }
         let mut action = None;
-        if let (Some(source), Some(body)) = (&mut avatar.source, &mut self.body) {
+        if let (Some(source), Some(body)) = (&mut avatar.source, &mut self.doc.body) {
             egui::CollapsingHeader::new("Source photo and fit")
                 .default_open(true)
                 .show(ui, |ui| action = source.ui(ui, body));
@@ -70,7 +70,7 @@ impl GuavaApp {
     /// pauses, the view looks through the photo's camera), stop, reconstruct with the body's
     /// current pose, or save it as a tracking file.
     pub fn fit_action(&mut self, action: FitAction) {
-        let (Some(avatar), Some(body)) = (&mut self.avatar, &mut self.body) else {
+        let (Some(avatar), Some(body)) = (&mut self.doc.avatar, &mut self.doc.body) else {
             return;
         };
         let Some(source) = &mut avatar.source else {
@@ -84,10 +84,10 @@ impl GuavaApp {
         match action {
             FitAction::StartEditing => {
                 source.set_editing(true, body);
-                if let Some(motion) = &mut self.motion {
+                if let Some(motion) = &mut self.doc.motion {
                     motion.player.playing = false;
                 }
-                self.camera_mode = CameraMode::Source;
+                self.viewing.camera_mode = CameraMode::Source;
             }
             FitAction::StopEditing => source.set_editing(false, body),
             FitAction::Reconstruct => {

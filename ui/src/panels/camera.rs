@@ -9,22 +9,35 @@ use crate::orbit::{OrbitCamera, VIEWS};
 impl GuavaApp {
     pub(crate) fn camera_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("Camera");
-        let source = self.avatar.as_ref().and_then(|a| a.source_camera).is_some()
-            && self.view == View::Avatar;
-        let tracked =
-            self.motion.as_ref().and_then(|m| m.camera()).is_some() && self.view != View::Gaussians;
+        let source = self
+            .doc
+            .avatar
+            .as_ref()
+            .and_then(|a| a.source_camera)
+            .is_some()
+            && self.viewing.view == View::Avatar;
+        let tracked = self.doc.motion.as_ref().and_then(|m| m.camera()).is_some()
+            && self.viewing.view != View::Gaussians;
         ui.horizontal(|ui| {
-            ui.selectable_value(&mut self.camera_mode, CameraMode::Orbit, "orbit");
+            ui.selectable_value(&mut self.viewing.camera_mode, CameraMode::Orbit, "orbit");
             ui.add_enabled_ui(source, |ui| {
-                ui.selectable_value(&mut self.camera_mode, CameraMode::Source, "source photo")
-                    .on_hover_text("the camera of the photo the avatar was reconstructed from");
+                ui.selectable_value(
+                    &mut self.viewing.camera_mode,
+                    CameraMode::Source,
+                    "source photo",
+                )
+                .on_hover_text("the camera of the photo the avatar was reconstructed from");
             });
             ui.add_enabled_ui(tracked, |ui| {
-                ui.selectable_value(&mut self.camera_mode, CameraMode::Tracked, "tracked")
-                    .on_hover_text("the motion's tracked camera, following the timeline");
+                ui.selectable_value(
+                    &mut self.viewing.camera_mode,
+                    CameraMode::Tracked,
+                    "tracked",
+                )
+                .on_hover_text("the motion's tracked camera, following the timeline");
             });
-            ui.add_enabled_ui(!self.camera_keys.is_empty(), |ui| {
-                ui.selectable_value(&mut self.camera_mode, CameraMode::Keys, "keys")
+            ui.add_enabled_ui(!self.viewing.camera_keys.is_empty(), |ui| {
+                ui.selectable_value(&mut self.viewing.camera_mode, CameraMode::Keys, "keys")
                     .on_hover_text("the camera path keyed below, following the timeline");
             });
         });
@@ -41,7 +54,7 @@ impl GuavaApp {
                 }
             }
         });
-        let o = &mut self.orbit;
+        let o = &mut self.viewing.orbit;
         let mut yaw = o.yaw_rad.to_degrees();
         let mut pitch = o.pitch_rad.to_degrees();
         let mut fov = o.fov_y_rad.to_degrees();
@@ -84,29 +97,29 @@ impl GuavaApp {
         egui::CollapsingHeader::new("Camera path (keys)")
             .default_open(false)
             .show(ui, |ui| {
-                if let Some(key) = self.camera_keys.ui(ui, time, self.orbit) {
-                    self.orbit = key;
+                if let Some(key) = self.viewing.camera_keys.ui(ui, time, self.viewing.orbit) {
+                    self.viewing.orbit = key;
                     moved = true;
                 }
             });
         if moved {
-            self.camera_mode = CameraMode::Orbit;
+            self.viewing.camera_mode = CameraMode::Orbit;
         }
     }
 
     /// Frames what the view shows with the orbit camera.
     pub(crate) fn reset_camera(&mut self) {
-        let fov = self.orbit.fov_y_rad;
-        match self.view {
+        let fov = self.viewing.orbit.fov_y_rad;
+        match self.viewing.view {
             View::Gaussians => {
-                if let Some(scene) = &self.scene {
-                    self.orbit = OrbitCamera::framing(&scene.cloud, fov);
+                if let Some(scene) = &self.doc.scene {
+                    self.viewing.orbit = OrbitCamera::framing(&scene.cloud, fov);
                 }
             }
             View::Body | View::Avatar => {
-                if let Some(body) = &mut self.body {
+                if let Some(body) = &mut self.doc.body {
                     let (lo, hi) = body.bounds();
-                    self.orbit = OrbitCamera {
+                    self.viewing.orbit = OrbitCamera {
                         y_up: true,
                         ..OrbitCamera::framing_box(lo, hi, fov)
                     };
@@ -118,18 +131,18 @@ impl GuavaApp {
     /// The camera the viewport looks through at `width × height` pixels: a fixed camera (the
     /// photo's or the tracked one) when chosen and available, else the orbit.
     pub(crate) fn view_camera(&self, width: u32, height: u32) -> Camera {
-        let fixed = match self.camera_mode {
+        let fixed = match self.viewing.camera_mode {
             CameraMode::Keys => {
-                let keyed = self.camera_keys.at(self.time());
-                return keyed.unwrap_or(self.orbit).camera(width, height);
+                let keyed = self.viewing.camera_keys.at(self.time());
+                return keyed.unwrap_or(self.viewing.orbit).camera(width, height);
             }
             CameraMode::Orbit => None,
-            CameraMode::Source => self.avatar.as_ref().and_then(|a| a.source_camera),
-            CameraMode::Tracked => self.motion.as_ref().and_then(|m| m.camera()),
+            CameraMode::Source => self.doc.avatar.as_ref().and_then(|a| a.source_camera),
+            CameraMode::Tracked => self.doc.motion.as_ref().and_then(|m| m.camera()),
         };
         match fixed {
             Some((w2c, invtanfov)) => Camera::guava_in_viewport(w2c, invtanfov, width, height),
-            None => self.orbit.camera(width, height),
+            None => self.viewing.orbit.camera(width, height),
         }
     }
 }

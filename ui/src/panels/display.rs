@@ -17,7 +17,7 @@ const INTERACTIVE_SCALES: [(f32, &str); 4] =
 impl GuavaApp {
     /// The channel count of what the splatting view shows.
     fn shown_channels(&self) -> u32 {
-        match (self.view, &self.scene, &self.avatar) {
+        match (self.viewing.view, &self.doc.scene, &self.doc.avatar) {
             (View::Avatar, _, Some(a)) => a.avatar.channels as u32,
             (View::Gaussians, Some(s), _) => s.cloud.channels as u32,
             _ => 3,
@@ -28,21 +28,25 @@ impl GuavaApp {
         ui.heading("Display");
         let channels = self.shown_channels();
         ui.horizontal(|ui| {
-            ui.selectable_value(&mut self.display.mode, PresentMode::Rgb, "Features");
-            ui.selectable_value(&mut self.display.mode, PresentMode::Alpha, "Alpha");
-            ui.selectable_value(&mut self.display.mode, PresentMode::InverseDepth, "1/depth");
+            ui.selectable_value(&mut self.viewing.display.mode, PresentMode::Rgb, "Features");
+            ui.selectable_value(&mut self.viewing.display.mode, PresentMode::Alpha, "Alpha");
+            ui.selectable_value(
+                &mut self.viewing.display.mode,
+                PresentMode::InverseDepth,
+                "1/depth",
+            );
         });
-        if self.display.mode == PresentMode::Rgb && channels > 3 {
+        if self.viewing.display.mode == PresentMode::Rgb && channels > 3 {
             ui.horizontal(|ui| {
                 let label = ui.label("channels as RGB");
-                for c in &mut self.display.rgb_channels {
+                for c in &mut self.viewing.display.rgb_channels {
                     ui.add(egui::DragValue::new(c).range(0..=channels - 1))
                         .labelled_by(label.id);
                 }
             });
         }
-        if self.display.mode == PresentMode::InverseDepth {
-            let r = &mut self.display.inv_depth_range;
+        if self.viewing.display.mode == PresentMode::InverseDepth {
+            let r = &mut self.viewing.display.inv_depth_range;
             ui.add(
                 egui::Slider::new(&mut r[1], 0.01..=10.0)
                     .logarithmic(true)
@@ -69,22 +73,23 @@ impl GuavaApp {
              of the raw splat image",
         );
         ui.checkbox(
-            &mut self.display_photo_beside,
+            &mut self.viewing.display_photo_beside,
             "the photo beside the avatar",
         )
         .on_hover_text(
             "the photo the avatar was made from, left of it; with the camera on the source \
                  photo the two should match (Camera > source photo)",
         );
-        let avatar = self.view == View::Avatar;
-        self.views.ui(ui, avatar);
+        let avatar = self.viewing.view == View::Avatar;
+        self.viewing.views.ui(ui, avatar);
         let photo = self
+            .viewing
             .views
             .compare
             .is_some_and(|c| [c.left, c.right].contains(&Shown::Photo));
-        if avatar && photo && self.camera_mode == CameraMode::Orbit {
+        if avatar && photo && self.viewing.camera_mode == CameraMode::Orbit {
             // The photo lines up with the avatar only through its own camera.
-            self.camera_mode = CameraMode::Source;
+            self.viewing.camera_mode = CameraMode::Source;
         }
         ui.add_enabled_ui(self.refined.enabled, |ui| {
             egui::ComboBox::new("refiner_on", "refiner runs on")
@@ -113,9 +118,9 @@ impl GuavaApp {
         }
         ui.horizontal(|ui| {
             ui.label("background");
-            ui.color_edit_button_rgb(&mut self.background);
+            ui.color_edit_button_rgb(&mut self.viewing.background);
         });
-        let scale = &mut self.interaction.scale;
+        let scale = &mut self.viewing.interaction.scale;
         let current = INTERACTIVE_SCALES
             .iter()
             .find(|(s, _)| s == scale)
@@ -156,7 +161,7 @@ impl GuavaApp {
                 for (k, v) in self.drive_hud_rows() {
                     row(k, v);
                 }
-                if let Some(body) = &self.body {
+                if let Some(body) = &self.doc.body {
                     row("pose (CPU)", format!("{:.1} ms", body.pose_ms));
                 }
                 row("rig + encode (CPU)", format!("{:.1} ms", report.prepare_ms));
@@ -192,7 +197,7 @@ impl GuavaApp {
                     "rendered at",
                     format!(
                         "{w}×{h}{}",
-                        if self.interaction.active {
+                        if self.viewing.interaction.active {
                             " (interacting)"
                         } else {
                             ""
@@ -201,7 +206,7 @@ impl GuavaApp {
                 );
                 if let Some(s) = report.stats {
                     row("Gaussians", s.input.to_string());
-                    if let Some(a) = self.avatar.as_ref().filter(|a| !a.show_outside) {
+                    if let Some(a) = self.doc.avatar.as_ref().filter(|a| !a.show_outside) {
                         row("left out (unseen)", a.avatar.outside.to_string());
                     }
                     row("drawn", s.visible.to_string());

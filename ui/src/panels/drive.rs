@@ -22,7 +22,7 @@ impl GuavaApp {
     /// Drives the body from `source` (stopping any drive before), pausing the timeline.
     pub fn drive_from(&mut self, source: DriveSource) {
         self.drive = None;
-        if let Some(motion) = &mut self.motion {
+        if let Some(motion) = &mut self.doc.motion {
             motion.player.playing = false;
         }
         let drive = Drive::start(source);

@@ -53,21 +53,21 @@ impl GuavaApp {
                     ui.close();
                 }
                 if ui
-                    .add_enabled(self.scene.is_some(), egui::Button::new("Save PLY as…"))
+                    .add_enabled(self.doc.scene.is_some(), egui::Button::new("Save PLY as…"))
                     .clicked()
                 {
                     self.save_ply_dialog();
                     ui.close();
                 }
                 if ui
-                    .add_enabled(self.avatar.is_some(), egui::Button::new("Save avatar as…"))
+                    .add_enabled(self.doc.avatar.is_some(), egui::Button::new("Save avatar as…"))
                     .clicked()
                 {
                     self.save_avatar_dialog();
                     ui.close();
                 }
                 if ui
-                    .add_enabled(self.avatar.is_some(), egui::Button::new("Export…"))
+                    .add_enabled(self.doc.avatar.is_some(), egui::Button::new("Export…"))
                     .on_hover_text("the view as PNG, the timeline as a PNG sequence and GIF, the posed avatar as PLY, the posed mesh as glTF")
                     .clicked()
                 {
@@ -140,10 +140,10 @@ impl GuavaApp {
     }
 
     pub(crate) fn view_choice_ui(&mut self, ui: &mut egui::Ui) {
-        let mut view = self.view;
+        let mut view = self.viewing.view;
         ui.selectable_value(&mut view, View::Body, "Body mesh");
         ui.selectable_value(&mut view, View::Gaussians, "Gaussians");
-        if self.avatar.is_some() {
+        if self.doc.avatar.is_some() {
             ui.selectable_value(&mut view, View::Avatar, "Avatar");
         }
         self.set_view(view);
@@ -157,14 +157,14 @@ impl GuavaApp {
             self.view_choice_ui(ui);
         });
         ui.separator();
-        if self.view == View::Avatar {
+        if self.viewing.view == View::Avatar {
             self.avatar_ui(ui);
         }
-        if matches!(self.view, View::Body | View::Avatar) {
+        if matches!(self.viewing.view, View::Body | View::Avatar) {
             self.mode_ui(ui);
             ui.separator();
             ui.heading("Body");
-            match &mut self.body {
+            match &mut self.doc.body {
                 Some(body) => body.ui(ui),
                 None => {
                     ui.label("no body model loaded");
@@ -176,7 +176,7 @@ impl GuavaApp {
             ui.separator();
         }
         ui.heading("Scene");
-        match &self.scene {
+        match &self.doc.scene {
             Some(s) => {
                 ui.label(format!("{} — {}", s.name, s.kind));
                 ui.label(format!(
@@ -210,11 +210,11 @@ impl GuavaApp {
 
     fn motion_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("Motion");
-        match &self.motion {
+        match &self.doc.motion {
             Some(motion) => {
                 motion.info_ui(ui);
                 if ui.button("Unload motion").clicked() {
-                    self.motion = None;
+                    self.doc.motion = None;
                 }
             }
             None => {

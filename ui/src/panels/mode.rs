@@ -7,8 +7,8 @@ impl GuavaApp {
     /// Which reconstruction a dropped photo gets, and the files GUAVA mode needs.
     pub(crate) fn mode_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("Mode");
-        let ehm = self.body.as_ref().is_some_and(|b| b.model.is_ehm());
-        ui.label(match (ehm, &self.networks) {
+        let ehm = self.doc.body.as_ref().is_some_and(|b| b.model.is_ehm());
+        ui.label(match (ehm, &self.doc.networks) {
             (false, _) => {
                 "Default mode: photos become the default reconstruction on a body template (no \
                  learned weights). GUAVA mode needs an EHM body and GUAVA's networks."
@@ -21,10 +21,10 @@ impl GuavaApp {
                  their tracking (.json beside them) or fitted to their keypoints."
             }
         });
-        if let Some(n) = &self.networks {
+        if let Some(n) = &self.doc.networks {
             ui.label(&n.label);
         }
-        ui.label(match &self.dwpose {
+        ui.label(match &self.doc.dwpose {
             Some(dir) => format!(
                 "Keypoints: body and hands from EHM-Tracker's DWPose ({}); face, irises and mask \
                  from MediaPipe's models",
@@ -65,8 +65,8 @@ impl GuavaApp {
             {
                 self.open_wholebody(dir);
             }
-            if self.dwpose.is_some() && ui.button("MediaPipe's keypoints").clicked() {
-                self.dwpose = None;
+            if self.doc.dwpose.is_some() && ui.button("MediaPipe's keypoints").clicked() {
+                self.doc.dwpose = None;
             }
         });
         if let Some(path) = pick {

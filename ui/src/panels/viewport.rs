@@ -26,8 +26,8 @@ impl GuavaApp {
         let mut rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
         // The photo beside the avatar: the left half shows it, the avatar draws in the right.
-        let photo = match (&mut self.avatar, self.view) {
-            (Some(a), View::Avatar) if self.display_photo_beside => match &mut a.fidelity {
+        let photo = match (&mut self.doc.avatar, self.viewing.view) {
+            (Some(a), View::Avatar) if self.viewing.display_photo_beside => match &mut a.fidelity {
                 Some(Ok(f)) => Some(f.photo(ui.ctx())),
                 _ => None,
             },
@@ -35,7 +35,10 @@ impl GuavaApp {
         };
         if let Some((texture, uv)) = photo {
             let (left, right) = rect.split_left_right_at_fraction(0.5);
-            let [r, g, b] = self.background.map(|c| (c.clamp(0.0, 1.0) * 255.0) as u8);
+            let [r, g, b] = self
+                .viewing
+                .background
+                .map(|c| (c.clamp(0.0, 1.0) * 255.0) as u8);
             ui.painter()
                 .rect_filled(left, 0.0, egui::Color32::from_rgb(r, g, b));
             let side = left.width().min(left.height());
@@ -44,10 +47,10 @@ impl GuavaApp {
                 .image(texture, square, uv, egui::Color32::WHITE);
             rect = right;
         }
-        let showing = match self.view {
-            View::Gaussians => self.scene.is_some(),
-            View::Body => self.body.is_some(),
-            View::Avatar => self.avatar.is_some() && self.body.is_some(),
+        let showing = match self.viewing.view {
+            View::Gaussians => self.doc.scene.is_some(),
+            View::Body => self.doc.body.is_some(),
+            View::Avatar => self.doc.avatar.is_some() && self.doc.body.is_some(),
         };
         if !showing {
             self.empty_state_ui(ui, rect);
@@ -65,11 +68,11 @@ impl GuavaApp {
         }
         let mut moved = false;
         if response.double_clicked() {
-            self.camera_mode = CameraMode::Orbit;
+            self.viewing.camera_mode = CameraMode::Orbit;
             self.reset_camera();
-        } else if self.orbit.handle(&response, ui) {
+        } else if self.viewing.orbit.handle(&response, ui) {
             // Dragging or zooming takes the view back to the orbit camera.
-            self.camera_mode = CameraMode::Orbit;
+            self.viewing.camera_mode = CameraMode::Orbit;
             moved = true;
         }
         let ppp = ui.ctx().pixels_per_point();
@@ -82,15 +85,20 @@ impl GuavaApp {
         }
         let look = |channels: usize| {
             let mut background = vec![0.0; channels];
-            for (c, v) in background.iter_mut().zip(self.background) {
+            for (c, v) in background.iter_mut().zip(self.viewing.background) {
                 *c = v;
             }
             Look {
                 background,
-                display: self.display.clone(),
+                display: self.viewing.display.clone(),
             }
         };
-        let content = match (self.view, &self.scene, &mut self.body, &self.avatar) {
+        let content = match (
+            self.viewing.view,
+            &self.doc.scene,
+            &mut self.doc.body,
+            &self.doc.avatar,
+        ) {
             (View::Gaussians, Some(scene), ..) => Content::Cloud {
                 cloud: CloudRef {
                     id: scene.id,
@@ -104,25 +112,25 @@ impl GuavaApp {
                 look: look(avatar.avatar.channels),
                 outside: avatar.show_outside,
             },
-            (View::Body, _, Some(body), _) => Content::Mesh(body.frame(self.background)),
+            (View::Body, _, Some(body), _) => Content::Mesh(body.frame(self.viewing.background)),
             _ => return,
         };
-        let playing = self.motion.as_ref().is_some_and(|m| m.is_playing())
+        let playing = self.doc.motion.as_ref().is_some_and(|m| m.is_playing())
             || self.drive.as_ref().is_some_and(|d| d.running());
         // Dragging the split's line moves no content: not interaction.
         let splitting = ui.ctx().is_being_dragged(Self::split_id(ui));
         let pressed = ui.ctx().input(|i| i.pointer.any_down()) && !splitting;
         let interacting = moved || pressed || playing;
-        self.interaction.active = interacting && self.interaction.scale < 1.0;
-        if self.interaction.active {
+        self.viewing.interaction.active = interacting && self.viewing.interaction.scale < 1.0;
+        if self.viewing.interaction.active {
             ui.ctx().request_repaint_after(SETTLE);
         }
         let camera = self.view_camera(w, h);
-        let scale = match self.interaction.active {
-            true => self.interaction.scale,
+        let scale = match self.viewing.interaction.active {
+            true => self.viewing.interaction.scale,
             false => 1.0,
         };
-        let preview = self.interaction.active;
+        let preview = self.viewing.interaction.active;
         let frame = |content, pane| Frame {
             content,
             camera,
@@ -144,14 +152,17 @@ impl GuavaApp {
                 Shown::Raw
             }
         };
-        let panes = match self.views.compare {
+        let panes = match self.viewing.views.compare {
             Some(c) => {
                 let (left, right) = rect.split_left_right_at_x(egui::lerp(rect.x_range(), c.at));
                 vec![(left, usable(c.left)), (right, usable(c.right))]
             }
             None => vec![(
                 rect,
-                usable(Shown::of_display(&self.display, self.refined.enabled)),
+                usable(Shown::of_display(
+                    &self.viewing.display,
+                    self.refined.enabled,
+                )),
             )],
         };
         let refine_now = !interacting || self.refined.while_interacting;
@@ -165,7 +176,7 @@ impl GuavaApp {
             (report.refine.showing, report.refine.behind) = (false, false);
         }
         for (pane, &(clip, shown)) in panes.iter().enumerate() {
-            match shown.display(&self.display) {
+            match shown.display(&self.viewing.display) {
                 Some(display) => {
                     let mut content = content.clone();
                     if let Content::Cloud { look, .. } | Content::Avatar { look, .. } = &mut content
@@ -181,8 +192,8 @@ impl GuavaApp {
                     self.paint_frame(ui, rect, clip, frame);
                 }
                 None if shown == Shown::Mesh => {
-                    if let Some(body) = &mut self.body {
-                        let mesh = Content::Mesh(body.frame(self.background));
+                    if let Some(body) = &mut self.doc.body {
+                        let mesh = Content::Mesh(body.frame(self.viewing.background));
                         self.paint_frame(ui, rect, clip, frame(mesh, pane));
                     }
                 }
@@ -190,10 +201,11 @@ impl GuavaApp {
             }
         }
         // The mesh over the avatar (not over a mesh pane: the view has one mesh image).
-        if let (true, Some(opacity), Some(body)) = (avatar, self.views.mesh_over, &mut self.body)
+        if let (true, Some(opacity), Some(body)) =
+            (avatar, self.viewing.views.mesh_over, &mut self.doc.body)
             && !panes.iter().any(|(_, s)| *s == Shown::Mesh)
         {
-            let mut mesh = body.frame(self.background);
+            let mut mesh = body.frame(self.viewing.background);
             mesh.style.overlay = Some(opacity);
             self.paint_frame(ui, rect, rect, frame(Content::Mesh(mesh), 0));
         }
@@ -218,9 +230,12 @@ impl GuavaApp {
     /// [`guava::camera::Camera::guava_in_viewport`] places it), seen inside `clip`.
     fn photo_pane(&mut self, ui: &egui::Ui, rect: egui::Rect, clip: egui::Rect) {
         let painter = ui.painter().with_clip_rect(clip);
-        let [r, g, b] = self.background.map(|c| (c.clamp(0.0, 1.0) * 255.0) as u8);
+        let [r, g, b] = self
+            .viewing
+            .background
+            .map(|c| (c.clamp(0.0, 1.0) * 255.0) as u8);
         painter.rect_filled(rect, 0.0, egui::Color32::from_rgb(r, g, b));
-        match self.avatar.as_mut().map(|a| &mut a.fidelity) {
+        match self.doc.avatar.as_mut().map(|a| &mut a.fidelity) {
             Some(Some(Ok(f))) => {
                 let (texture, uv) = f.photo(ui.ctx());
                 let side = rect.width().min(rect.height());
@@ -262,7 +277,7 @@ impl GuavaApp {
         if let (Some(p), true, Some(c)) = (
             response.interact_pointer_pos(),
             response.dragged(),
-            &mut self.views.compare,
+            &mut self.viewing.views.compare,
         ) {
             c.at = ((p.x - rect.left()) / rect.width()).clamp(0.0, 1.0);
         }
@@ -275,9 +290,9 @@ impl GuavaApp {
     /// On the demo portrait's avatar (the first launch), how to make one's own.
     fn demo_hint(&self, ui: &egui::Ui, rect: egui::Rect) {
         let demo = demo_portrait();
-        let showing_demo = self.view == View::Avatar
-            && !self.display_photo_beside
-            && self.avatar.as_ref().is_some_and(|a| {
+        let showing_demo = self.viewing.view == View::Avatar
+            && !self.viewing.display_photo_beside
+            && self.doc.avatar.as_ref().is_some_and(|a| {
                 demo.file_name()
                     .and_then(|n| n.to_str())
                     .is_some_and(|n| a.avatar.source == n)
@@ -307,7 +322,7 @@ impl GuavaApp {
             return None;
         };
         let gpu = self.gpu.context.as_ref()?;
-        let networks = self.networks.as_ref().map(|n| n.dir.as_path());
+        let networks = self.doc.networks.as_ref().map(|n| n.dir.as_path());
         let refiner = guava::refine::refiner_for(avatar.avatar.kind, networks);
         self.refined.unavailable = refiner
             .as_ref()
