@@ -29,6 +29,7 @@ pub mod synthetic;
 pub mod track;
 pub mod tracking;
 pub mod video;
+pub mod view;
 
 /// The repository the library was built from: its assets (models, the demo portrait, the demo
 /// clip) ship in it and are read from there, never downloaded.

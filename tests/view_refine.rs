@@ -11,11 +11,11 @@ use guava::body::{BodyModel, BodyPose, Posable, PosedBody};
 use guava::gpu::GpuContext;
 use guava::pipeline::{Photo, Pipeline, Tracked};
 use guava::refine::{DEFAULT_REFINER, Refiner, RefinerOn, SharedRefiner};
-use guava::render::view::{
-    AvatarRef, Content, Display, Frame, Look, PoseRef, RefineWith, ViewRenderer, ViewReport,
-};
 use guava::render::{GpuAvatar, HeadlessRenderer, read_texture_bytes};
 use guava::tracking::SourceView;
+use guava::view::{
+    AvatarRef, Content, Display, Frame, Look, PoseRef, RefineWith, ViewRenderer, ViewReport,
+};
 
 const BACKGROUND: [f32; 3] = [0.2, 0.45, 0.7];
 const TARGET: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;

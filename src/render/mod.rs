@@ -14,7 +14,6 @@ pub(crate) mod shader;
 mod sort;
 pub mod splatter;
 mod timing;
-pub mod view;
 
 pub use layout::GpuGaussian;
 pub use pipelines::{FeatureStorage, RasterTuning, SplatPipelines};

@@ -12,7 +12,7 @@ use guava::eval::Metrics;
 use guava::gaussians::GaussianCloud;
 use guava::guava_mode::GuavaModels;
 use guava::pipeline::Pipeline;
-use guava::render::view::{Display, ViewRenderer, ViewReport};
+use guava::view::{Display, ViewRenderer, ViewReport};
 
 use crate::avatar_view::{AvatarState, SourcePreview};
 use crate::body_panel::BodyState;

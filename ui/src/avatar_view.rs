@@ -10,8 +10,8 @@ use guava::body::{Landmark, Posable, PosedBody};
 use guava::fit::{BodyPoint, FitReport};
 use guava::keypoints::Keypoint;
 use guava::photo::{Crop, SOURCE_SIZE, SourceImage};
-use guava::render::view::AvatarRef;
 use guava::tracking::SourceView;
+use guava::view::AvatarRef;
 
 use crate::body_panel::BodyState;
 use crate::fidelity::Fidelity;

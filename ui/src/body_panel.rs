@@ -8,7 +8,7 @@ use glam::Vec3;
 use guava::avatar::Avatar;
 use guava::body::{BodyPose, Posable, PosedBody, vertex_normals};
 use guava::render::mesh::MeshStyle;
-use guava::render::view::{MeshFrame, PoseRef};
+use guava::view::{MeshFrame, PoseRef};
 
 use crate::body_model::SliderGroup;
 use crate::ids::next_id;

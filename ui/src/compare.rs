@@ -3,7 +3,7 @@
 //! splats presented its own way), the refined picture, the mesh, or the photo.
 
 use guava::render::present::PresentMode;
-use guava::render::view::Display;
+use guava::view::Display;
 
 /// One view of the viewport's content.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -10,8 +10,8 @@ use guava::body::{BodyPose, Posable, PosedBody};
 use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
 use guava::render::sequence;
-use guava::render::view::{AvatarRef, PoseRef, RefineWith};
 use guava::tracking::{Retarget, Tracking};
+use guava::view::{AvatarRef, PoseRef, RefineWith};
 
 use crate::app::{GuavaApp, View};
 use crate::ids::next_id;

@@ -7,8 +7,8 @@ use std::sync::Arc;
 
 use guava::gpu::GpuContext;
 use guava::refine::{Refiner, RefinerOn};
-use guava::render::view::{AvatarRef, PoseRef};
 use guava::render::{AvatarRenderError, GpuAvatar, HeadlessRenderer, SplatImage, SplatPipelines};
+use guava::view::{AvatarRef, PoseRef};
 
 pub struct OffscreenRenderer {
     pub renderer: HeadlessRenderer,

@@ -9,7 +9,7 @@
 
 use guava::gpu::GpuContext;
 use guava::refine::{Refiner, RefinerOn, SharedRefiner};
-use guava::render::view::RefineWith;
+use guava::view::RefineWith;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, TryRecvError};

@@ -5,7 +5,7 @@
 
 use std::sync::{Arc, Mutex};
 
-use guava::render::view::{Frame, ViewRenderer, ViewReport};
+use guava::view::{Frame, ViewRenderer, ViewReport};
 
 pub struct ViewportCallback {
     pub frame: Frame,

@@ -25,11 +25,11 @@ use guava::gaussians::GaussianCloud;
 use guava::gpu::GpuContext;
 use guava::pipeline::{Mode, Photo, Pipeline, Tracked};
 use guava::refine::{DEFAULT_REFINER, Refiner, RefinerOn, SharedRefiner};
-use guava::render::view::{
-    AvatarRef, Content, Display, Frame, Look, PoseRef, RefineWith, ViewRenderer, ViewReport,
-};
 use guava::render::{GpuAvatar, HeadlessRenderer};
 use guava::tracking::{Retarget, demo_motion};
+use guava::view::{
+    AvatarRef, Content, Display, Frame, Look, PoseRef, RefineWith, ViewRenderer, ViewReport,
+};
 
 #[derive(clap::Args, Clone, Debug)]
 pub struct FrameBenchArgs {

@@ -222,7 +222,7 @@ impl GuavaApp {
 }
 
 /// Where the last refined picture was made and how long it took to reach the screen.
-fn last_refined(refine: &guava::render::view::RefineReport) -> Option<String> {
+fn last_refined(refine: &guava::view::RefineReport) -> Option<String> {
     let engine = refine.engine.as_ref()?;
     Some(match refine.ms {
         Some(ms) => format!("{ms:.0} ms, {engine}"),

@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use guava::render::view::{CloudRef, Content, Frame, Look, RefineWith};
+use guava::view::{CloudRef, Content, Frame, Look, RefineWith};
 
 use crate::app::{CameraMode, GuavaApp, View};
 use crate::compare::Shown;

@@ -16,13 +16,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::Vec3;
 
-use super::mesh::{MeshPass, MeshStyle};
-use super::present::{PresentMode, PresentPass, PresentUniform};
-use super::{GpuAvatar, RasterTuning, RenderStats, SplatPipelines, Splatter, StageTimer};
 use crate::avatar::Avatar;
 use crate::body::PosedBody;
 use crate::camera::Camera;
 use crate::gaussians::GaussianCloud;
+use crate::render::mesh::{MeshPass, MeshStyle};
+use crate::render::present::{PresentMode, PresentPass, PresentUniform};
+use crate::render::{GpuAvatar, RasterTuning, RenderStats, SplatPipelines, Splatter, StageTimer};
 use refined::{RefineStage, Showing};
 
 /// What one view draws this frame.
@@ -657,7 +657,7 @@ impl ViewRenderer {
     }
 
     /// GPU memory the splatting pass holds (for the HUD).
-    pub fn memory(&self) -> super::splatter::MemoryUse {
+    pub fn memory(&self) -> crate::render::splatter::MemoryUse {
         self.splatter.memory()
     }
 }
