@@ -225,7 +225,8 @@ mod tests {
                     srgb_target,
                     rgb_channels,
                     inv_depth_range,
-                    _pad
+                    _pad,
+                    background
                 )
             )
         );
