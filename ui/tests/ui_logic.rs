@@ -2,7 +2,7 @@
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use guava_ui::{CameraMode, FitAction, GuavaApp, Options, View};
+use guava_ui::{CameraMode, Export, FitAction, GuavaApp, Options, View};
 use std::time::{Duration, Instant};
 
 /// One frame through the whole pipeline: UI logic, then a real render (paint callbacks included).
@@ -912,7 +912,9 @@ fn exports_write_the_view_a_sequence_a_ply_and_a_mesh() {
     let settings = h.state_mut().export_settings();
     (settings.width, settings.height) = (96, 64);
     let png = dir.join("view.png");
-    h.state_mut().export_png(png.clone());
+    h.state_mut()
+        .export(Export::Png(png.clone()))
+        .expect("png export starts");
     let status = wait_for_status(&mut h, "view.png");
     assert!(status.starts_with("wrote"), "{status}");
     let image = image::open(&png).expect("a whole PNG");
@@ -921,7 +923,9 @@ fn exports_write_the_view_a_sequence_a_ply_and_a_mesh() {
     let settings = h.state_mut().export_settings();
     (settings.fps, settings.path) = (2.0, guava_ui::CameraPath::Turntable);
     let frames = dir.join("frames");
-    h.state_mut().export_sequence(frames.clone());
+    h.state_mut()
+        .export(Export::Sequence(frames.clone()))
+        .expect("sequence export starts");
     let status = wait_for_status(&mut h, "frames");
     assert!(status.contains("wrote 17 frames"), "{status}");
     for i in 0..17 {
@@ -939,7 +943,9 @@ fn exports_write_the_view_a_sequence_a_ply_and_a_mesh() {
 
     // Cancelled right away: an error that says so, no half frame.
     let cancelled = dir.join("cancelled");
-    h.state_mut().export_sequence(cancelled.clone());
+    h.state_mut()
+        .export(Export::Sequence(cancelled.clone()))
+        .expect("sequence export starts");
     h.state_mut().cancel_job();
     let status = wait_for_status(&mut h, "cancelled");
     assert!(
@@ -957,7 +963,7 @@ fn exports_write_the_view_a_sequence_a_ply_and_a_mesh() {
     );
 
     let ply = dir.join("posed.ply");
-    h.state_mut().export_posed_ply(&ply).expect("ply");
+    h.state_mut().export(Export::Ply(ply.clone())).expect("ply");
     let cloud = guava::gaussians::read_file(&ply).expect("reads back");
     let (_, count) = h.state().avatar_info().expect("avatar");
     assert_eq!(cloud.len(), count);
@@ -965,7 +971,9 @@ fn exports_write_the_view_a_sequence_a_ply_and_a_mesh() {
     // Standing, y down: the head (0.66 m up on the body) is at the smallest y.
     assert!(hi.y - lo.y > 1.0 && lo.y < -0.6, "{lo} {hi}");
     let glb = dir.join("posed.glb");
-    h.state_mut().export_posed_mesh(&glb).expect("glb");
+    h.state_mut()
+        .export(Export::Mesh(glb.clone()))
+        .expect("glb");
     let bytes = std::fs::read(&glb).expect("glb");
     let gltf = gltf::Gltf::from_slice(&bytes).expect("valid glTF");
     assert_eq!(gltf.meshes().count(), 1);
@@ -973,7 +981,7 @@ fn exports_write_the_view_a_sequence_a_ply_and_a_mesh() {
     // (its content is checked against the rig in the library's export test).
     let animatable = dir.join("animatable.glb");
     h.state_mut()
-        .export_animatable(&animatable)
+        .export(Export::Animatable(animatable.clone()))
         .expect("animatable glb");
     let bytes = std::fs::read(&animatable).expect("animatable glb");
     let gltf = gltf::Gltf::from_slice_without_validation(&bytes).expect("glTF");
@@ -1254,7 +1262,9 @@ fn a_keyed_camera_path_is_flown_by_the_export() {
         *h.state_mut().orbit_mut() = orbit;
         h.state_mut().export_settings().path = path;
         let out = dir.join(name);
-        h.state_mut().export_sequence(out.clone());
+        h.state_mut()
+            .export(Export::Sequence(out.clone()))
+            .expect("sequence export starts");
         let status = wait_for_status(h, name);
         assert!(status.contains("wrote 9 frames"), "{status}");
         move |i| {

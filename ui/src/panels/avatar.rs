@@ -7,9 +7,10 @@ use guava::avatar::AvatarKind;
 use guava::body::Posable;
 use guava::tracking::SourceView;
 
-use crate::app::{CameraMode, GuavaApp};
+use crate::app::GuavaApp;
 use crate::avatar_view::FitAction;
 use crate::files::file_name;
+use crate::viewing::CameraMode;
 
 impl GuavaApp {
     pub(crate) fn avatar_ui(&mut self, ui: &mut egui::Ui) {

@@ -1,10 +1,9 @@
 //! The camera panel: orbit, the source photo's camera, the motion's tracked camera or the keyed
 //! path, the orbit's angles, distance and field of view, framing what is shown, and the keys.
 
-use guava::camera::Camera;
-
-use crate::app::{CameraMode, GuavaApp, View};
-use crate::orbit::{OrbitCamera, VIEWS};
+use crate::app::GuavaApp;
+use crate::orbit::VIEWS;
+use crate::viewing::{CameraMode, View};
 
 impl GuavaApp {
     pub(crate) fn camera_ui(&mut self, ui: &mut egui::Ui) {
@@ -49,7 +48,7 @@ impl GuavaApp {
                     .on_hover_text(format!("key {}", i + 1))
                     .clicked()
                 {
-                    self.set_view_preset(i);
+                    self.viewing.preset(i);
                     moved = true;
                 }
             }
@@ -91,7 +90,7 @@ impl GuavaApp {
         o.fov_y_rad = fov.to_radians();
         if ui.button("Reset camera").clicked() {
             moved = true;
-            self.reset_camera();
+            self.viewing.frame(&mut self.doc);
         }
         let time = self.time();
         egui::CollapsingHeader::new("Camera path (keys)")
@@ -104,45 +103,6 @@ impl GuavaApp {
             });
         if moved {
             self.viewing.camera_mode = CameraMode::Orbit;
-        }
-    }
-
-    /// Frames what the view shows with the orbit camera.
-    pub(crate) fn reset_camera(&mut self) {
-        let fov = self.viewing.orbit.fov_y_rad;
-        match self.viewing.view {
-            View::Gaussians => {
-                if let Some(scene) = &self.doc.scene {
-                    self.viewing.orbit = OrbitCamera::framing(&scene.cloud, fov);
-                }
-            }
-            View::Body | View::Avatar => {
-                if let Some(body) = &mut self.doc.body {
-                    let (lo, hi) = body.bounds();
-                    self.viewing.orbit = OrbitCamera {
-                        y_up: true,
-                        ..OrbitCamera::framing_box(lo, hi, fov)
-                    };
-                }
-            }
-        }
-    }
-
-    /// The camera the viewport looks through at `width × height` pixels: a fixed camera (the
-    /// photo's or the tracked one) when chosen and available, else the orbit.
-    pub(crate) fn view_camera(&self, width: u32, height: u32) -> Camera {
-        let fixed = match self.viewing.camera_mode {
-            CameraMode::Keys => {
-                let keyed = self.viewing.camera_keys.at(self.time());
-                return keyed.unwrap_or(self.viewing.orbit).camera(width, height);
-            }
-            CameraMode::Orbit => None,
-            CameraMode::Source => self.doc.avatar.as_ref().and_then(|a| a.source_camera),
-            CameraMode::Tracked => self.doc.motion.as_ref().and_then(|m| m.camera()),
-        };
-        match fixed {
-            Some((w2c, invtanfov)) => Camera::guava_in_viewport(w2c, invtanfov, width, height),
-            None => self.viewing.orbit.camera(width, height),
         }
     }
 }

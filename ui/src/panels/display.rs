@@ -7,8 +7,9 @@ use guava::refine::RefinerOn;
 use guava::render::present::PresentMode;
 use guava::render::splatter::Stage;
 
-use crate::app::{CameraMode, GuavaApp, View};
+use crate::app::GuavaApp;
 use crate::compare::Shown;
+use crate::viewing::{CameraMode, View};
 
 /// Resolution scales offered while the user drags, orbits or plays.
 const INTERACTIVE_SCALES: [(f32, &str); 4] =

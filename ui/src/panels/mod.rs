@@ -8,8 +8,9 @@ mod drive;
 mod mode;
 mod viewport;
 
-use crate::app::{GuavaApp, View};
+use crate::app::GuavaApp;
 use crate::files::demo_portrait;
+use crate::viewing::View;
 pub use drive::demo_video;
 
 impl GuavaApp {
@@ -20,10 +21,10 @@ impl GuavaApp {
                     self.open_dialog();
                     ui.close();
                 }
-                ui.add_enabled_ui(!self.recent.is_empty(), |ui| {
+                ui.add_enabled_ui(!self.recent.files().is_empty(), |ui| {
                     ui.menu_button("Open recent", |ui| {
                         let mut chosen = None;
-                        for path in &self.recent {
+                        for path in self.recent.files() {
                             if ui.button(path.display().to_string()).clicked() {
                                 chosen = Some(path.clone());
                             }
@@ -84,7 +85,7 @@ impl GuavaApp {
                 self.view_choice_ui(ui);
                 ui.separator();
                 if ui.button("Reset camera").clicked() {
-                    self.reset_camera();
+                    self.viewing.frame(&mut self.doc);
                     ui.close();
                 }
             });
@@ -112,10 +113,35 @@ impl GuavaApp {
         }
     }
 
+    pub(crate) fn save_avatar_dialog(&mut self) {
+        if self.doc.avatar.is_none() {
+            return;
+        }
+        if let Some(path) = rfd::FileDialog::new()
+            .add_filter("guava-rs avatar", &["guava"])
+            .set_file_name(format!("{}.guava", self.doc.avatar_stem()))
+            .save_file()
+        {
+            // The outcome is in the status bar.
+            let _ = self.save_avatar(&path);
+        }
+    }
+
+    fn save_ply_dialog(&mut self) {
+        let Some(scene) = &self.doc.scene else { return };
+        if let Some(path) = rfd::FileDialog::new()
+            .add_filter("3DGS PLY", &["ply"])
+            .set_file_name(format!("{}.ply", scene.name))
+            .save_file()
+        {
+            let _ = self.report_result(self.doc.save_scene(&path));
+        }
+    }
+
     /// The running job with its stage and Cancel, else the last message.
     pub(crate) fn status_ui(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
-            if let Some(job) = &self.job {
+            if let Some(job) = self.jobs.running() {
                 ui.spinner();
                 ui.label(format!(
                     "{} — {} ({:.1} s)",

@@ -63,7 +63,7 @@ impl GuavaApp {
                 .clicked()
                 && let Some(dir) = rfd::FileDialog::new().pick_folder()
             {
-                self.open_wholebody(dir);
+                self.start(Ok(crate::files::wholebody(dir, &self.doc)));
             }
             if self.doc.dwpose.is_some() && ui.button("MediaPipe's keypoints").clicked() {
                 self.doc.dwpose = None;

@@ -5,9 +5,10 @@ use std::time::Duration;
 
 use guava::view::{CloudRef, Content, Frame, Look, RefineWith};
 
-use crate::app::{CameraMode, GuavaApp, View};
+use crate::app::GuavaApp;
 use crate::compare::Shown;
 use crate::files::demo_portrait;
+use crate::viewing::{CameraMode, View};
 use crate::viewport::ViewportCallback;
 
 /// How soon after the last interactive frame a full-resolution one is drawn (scrolling and
@@ -69,7 +70,7 @@ impl GuavaApp {
         let mut moved = false;
         if response.double_clicked() {
             self.viewing.camera_mode = CameraMode::Orbit;
-            self.reset_camera();
+            self.viewing.frame(&mut self.doc);
         } else if self.viewing.orbit.handle(&response, ui) {
             // Dragging or zooming takes the view back to the orbit camera.
             self.viewing.camera_mode = CameraMode::Orbit;
@@ -125,7 +126,7 @@ impl GuavaApp {
         if self.viewing.interaction.active {
             ui.ctx().request_repaint_after(SETTLE);
         }
-        let camera = self.view_camera(w, h);
+        let camera = self.viewing.camera(&self.doc, w, h);
         let scale = match self.viewing.interaction.active {
             true => self.viewing.interaction.scale,
             false => 1.0,
