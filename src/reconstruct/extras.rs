@@ -8,7 +8,9 @@
 //! vertices: cloth between an arm and the torso below the shoulder (a jacket's sides beside a
 //! hanging arm) takes the torso's alone, so it stays with the torso when the arm swings instead
 //! of flapping with it like a wing (the demo portrait's suit did); elsewhere the nearest, arm or
-//! not (a sleeve follows its arm, hair its head).
+//! not (a sleeve follows its arm, hair its head). What lies past the body's reach (a held
+//! object) rides the body surface seen beside it, as one piece: each connected part takes the
+//! skinning of its pixel nearest the body.
 //!
 //! Each is a disc facing the source camera, one pixel wide, and as thick along the view as half
 //! its distance from that surface, up to [`MAX_DEPTH`] (thicker, a jacket's edge around the neck
@@ -24,7 +26,7 @@ use crate::avatar::{SkinnedGaussians, blend, quat_from_matrix, quat_mul};
 use crate::body::{BodyModel, PosedBody};
 use crate::camera::Camera;
 use crate::photo::SourceImage;
-use crate::photo::distance::nearest_seeds;
+use crate::photo::distance::{connected_parts, nearest_seeds};
 use crate::raster::Fragments;
 
 /// The thickest an extra Gaussian stands along the view (standard deviation, metres).
@@ -88,6 +90,9 @@ pub fn extras(
         .view_from_world
         .transform_point3(anchors.head_middle)
         .z;
+    // Each pixel's Gaussian, where it stands and what skins it, and whether it rides the
+    // surface beside it (a held object, past the body's reach).
+    let mut placed: Vec<(usize, Vec3, Skinning, bool, Extra)> = Vec::new();
     for (i, &m) in mask.iter().enumerate() {
         if m < PERSON || covered[i] {
             continue;
@@ -99,11 +104,15 @@ pub fn extras(
         let point = camera.unproject(x, y, z);
         let gap = camera.unproject((q % size) as f32 + 0.5, (q / size) as f32 + 0.5, z);
         let beside = body.triangles[fragments.triangle[q] as usize];
-        let Some((v, w)) = anchors.of(point, &beside) else {
-            continue;
+        let (skinning, held) = match anchors.near(point) {
+            Some(skinning) => (skinning, false),
+            None => match anchors.beside(point, &beside) {
+                Some(skinning) => (skinning, true),
+                None => continue,
+            },
         };
-        let hair = v.iter().any(|&k| anchors.head[k as usize]);
-        let (point, (v, w), along) = match hair {
+        let hair = skinning.0.iter().any(|&k| anchors.head[k as usize]);
+        let (point, skinning, along) = match hair {
             true => {
                 let deeper = camera.unproject(x, y, middle.max(z));
                 match anchors.of(deeper, &beside) {
@@ -111,7 +120,7 @@ pub fn extras(
                     None => continue,
                 }
             }
-            false => (point, (v, w), 0.5 * point.distance(gap)),
+            false => (point, skinning, 0.5 * point.distance(gap)),
         };
         let across = RADIUS_PX * camera.pixel_footprint(z);
         let along = along.clamp(across, MAX_DEPTH);
@@ -122,10 +131,39 @@ pub fn extras(
             opacity: OPACITY * m.min(1.0),
             features: [features[0], features[1], features[2], m.min(1.0)],
         };
-        push(&mut out, point, (v, w), disc, &gaussian, vertices, posed);
+        placed.push((i, point, skinning, held, gaussian));
+    }
+    // A held object moves as one piece: each connected part of what rides the surface beside
+    // it takes the skinning of its pixel nearest the body. Pixel by pixel, by the surface seen
+    // nearest each, the demo portrait's helmet tore across when she moved (its top rode her
+    // arm, its bottom her hip).
+    let mut held = vec![false; size * size];
+    for &(i, .., is_held, _) in &placed {
+        held[i] = is_held;
+    }
+    let (part, parts) = connected_parts(&held, size);
+    let mut attached: Vec<Option<(f32, Skinning)>> = vec![None; parts.len()];
+    for &(i, _, skinning, is_held, _) in &placed {
+        let (Some((distance, _)), true) = (nearest[i], is_held) else {
+            continue;
+        };
+        let slot = &mut attached[part[i] as usize];
+        if slot.is_none_or(|(d, _)| distance < d) {
+            *slot = Some((distance, skinning));
+        }
+    }
+    for (i, point, skinning, is_held, gaussian) in placed {
+        let skinning = match (is_held, attached.get(part[i] as usize)) {
+            (true, Some(Some((_, one)))) => *one,
+            _ => skinning,
+        };
+        push(&mut out, point, skinning, disc, &gaussian, vertices, posed);
     }
     out
 }
+
+/// Body vertices that skin a point and their weights (summing to 1).
+type Skinning = ([u32; 4], [f32; 4]);
 
 /// What an extra Gaussian is besides where: its scale (metres), opacity and features.
 struct Extra {
@@ -324,20 +362,33 @@ impl<'a> Anchors<'a> {
     }
 
     /// Up to [`ANCHORS`] vertices near `point` and their weights (summing to 1): within
-    /// [`REACH`], else three times as far, else `beside` (the corners of the body surface seen
-    /// nearest the point's pixel: a held object, such as the demo portrait's helmet 40 cm from
-    /// her arm, rides the surface it is seen beside).
-    fn of(&self, point: Vec3, beside: &[u32]) -> Option<([u32; 4], [f32; 4])> {
+    /// [`REACH`], else three times as far, else [`Anchors::beside`]'s.
+    fn of(&self, point: Vec3, beside: &[u32]) -> Option<Skinning> {
+        self.near(point).or_else(|| self.beside(point, beside))
+    }
+
+    /// [`Anchors::of`] within [`REACH`], else three times as far; `None` past that.
+    fn near(&self, point: Vec3) -> Option<Skinning> {
         let mut near = self.within(point, REACH);
         if near.is_empty() {
             near = self.within(point, 3.0 * REACH);
         }
-        if near.is_empty() {
-            near = beside
-                .iter()
-                .map(|&k| (self.vertices[k as usize].distance(point), k))
-                .collect();
-        }
+        self.weighted(point, near)
+    }
+
+    /// The corners of the body surface seen nearest the point's pixel (`beside`): what a held
+    /// object, such as the demo portrait's helmet 40 cm from her arm, rides.
+    fn beside(&self, point: Vec3, beside: &[u32]) -> Option<Skinning> {
+        let corners = beside
+            .iter()
+            .map(|&k| (self.vertices[k as usize].distance(point), k))
+            .collect();
+        self.weighted(point, corners)
+    }
+
+    /// The nearest [`ANCHORS`] of `near` (vertices with their distances from `point`; the
+    /// torso's alone under an arm), weighted by distance.
+    fn weighted(&self, point: Vec3, mut near: Vec<(f32, u32)>) -> Option<Skinning> {
         if near.is_empty() {
             return None;
         }
