@@ -52,6 +52,9 @@ pub struct Report {
     /// Default mode: texels filled from their mirror image.
     pub mirrored: usize,
     pub behind: usize,
+    /// Default mode: texels of hands the photo does not show, coloured as the hand or the face's
+    /// skin.
+    pub hands: usize,
     /// GUAVA mode: UV Gaussians dropped at opacity ≤ 0.001.
     pub pruned: usize,
     /// Default mode: Gaussians made for the person's pixels the body does not cover.
@@ -72,6 +75,7 @@ impl Report {
         self.observed = core.observed;
         self.mirrored = core.mirrored;
         self.behind = core.behind;
+        self.hands = core.hands;
         self.pruned = core.pruned;
         self.extras = core.extras;
         self.left_out = core.left_out;
@@ -109,9 +113,16 @@ impl Report {
                 self.observed, self.texels, self.pruned
             ),
             None => format!(
-                "{} of {} texels seen, {} mirrored, {} on the back from the front, rest inpainted; \
-                 {} Gaussians beyond the body; {} on parts the photo did not show left out",
-                self.observed, self.texels, self.mirrored, self.behind, self.extras, self.left_out
+                "{} of {} texels seen, {} mirrored, {} on the back from the front, {} on unseen \
+                 parts of the hands, rest inpainted; {} Gaussians beyond the body; {} on \
+                 parts the photo did not show left out",
+                self.observed,
+                self.texels,
+                self.mirrored,
+                self.behind,
+                self.hands,
+                self.extras,
+                self.left_out
             ),
         });
         parts.extend(self.notes.iter().cloned());
@@ -164,12 +175,14 @@ impl Report {
             ),
             None => format!(
                 "texels: {} valid, {} seen by the camera, {} filled by symmetry, {} on the back from \
-                 the front, the rest inpainted; {} Gaussians for the person's pixels beyond the \
-                 body; {} on parts the photo did not show left out",
+                 the front, {} on unseen parts of the hands, the rest inpainted; {} \
+                 Gaussians for the person's pixels beyond the body; {} on parts the photo did not \
+                 show left out",
                 self.texels,
                 self.observed,
                 self.mirrored,
                 self.behind,
+                self.hands,
                 self.extras,
                 self.left_out
             ),

@@ -35,12 +35,7 @@ pub fn behind(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Vec<Option<[
     let texel = |i: usize| {
         let point = uv.point(i, &body.vertices, &body.triangles);
         let normal = uv.point(i, &normals, &body.triangles);
-        let tri = body.triangles[uv.triangle[i] as usize];
-        let corner = uv.bary[i]
-            .iter()
-            .enumerate()
-            .fold(0, |m, (k, &b)| if b > uv.bary[i][m] { k } else { m });
-        let head = body.part_of(tri[corner] as usize) == Some("head");
+        let head = body.part_of(uv.nearest_vertex(i, &body.triangles)) == Some("head");
         (point, normal, head)
     };
     let points: Vec<(usize, Vec3, Vec3, bool)> = uv
@@ -169,7 +164,7 @@ impl FrontImage {
 }
 
 /// The per-channel median of `colours`, `None` for none.
-fn median(mut colours: Vec<[f32; 3]>) -> Option<[f32; 3]> {
+pub(super) fn median(mut colours: Vec<[f32; 3]>) -> Option<[f32; 3]> {
     if colours.is_empty() {
         return None;
     }

@@ -191,7 +191,7 @@ fn group_priors(
                 // The face: the head's front below the hairline; the scalp may wear hair.
                 Some("head") => head.is_some_and(|h| {
                     let p = body.vertices[v] - h;
-                    p.z > 0.02 && p.y < 0.06
+                    p.z > super::hands::FACE_FRONT && p.y < super::hands::FACE_BELOW
                 }),
                 Some(_) => true,
             };

@@ -17,13 +17,16 @@ pub enum FillSource {
     Mirrored,
     /// The back, from the front in front of it.
     Behind,
+    /// A hand's part the photo does not show, from what it shows of the hand or the face's
+    /// skin ([`super::hands`]).
+    Hand,
     Inpainted,
 }
 
 /// Mirrored colours count for less than observed ones in the pyramid.
 const MIRROR_WEIGHT: f32 = 0.5;
-/// The back's colours from the front count for less again: a guess about the person's back.
-const BEHIND_WEIGHT: f32 = 0.25;
+/// Guessed colours (the back's from the front, an unseen hand's skin) count for less again.
+const GUESS_WEIGHT: f32 = 0.25;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct FilledTexture {
@@ -35,9 +38,14 @@ pub struct FilledTexture {
     pub confidence: Vec<f32>,
 }
 
-/// Fills `texture` over the valid texels of `uv`, with `behind`'s colours for the back where it
-/// has them. Returns `None` if no texel was observed.
-pub fn fill(uv: &UvMap, texture: &UvTexture, behind: &[Option<[f32; 3]>]) -> Option<FilledTexture> {
+/// Fills `texture` over the valid texels of `uv`, with `guesses` (a colour and what it came
+/// from: [`FillSource::Behind`] or [`FillSource::Hand`]) where neither the texel nor its mirror
+/// image was seen. Returns `None` if no texel was observed.
+pub fn fill(
+    uv: &UvMap,
+    texture: &UvTexture,
+    guesses: &[Option<(FillSource, [f32; 3])>],
+) -> Option<FilledTexture> {
     let n = (uv.size * uv.size) as usize;
     let mut rgb = texture.rgb.clone();
     let mut weight = texture.confidence.clone();
@@ -53,10 +61,10 @@ pub fn fill(uv: &UvMap, texture: &UvTexture, behind: &[Option<[f32; 3]>]) -> Opt
             rgb[i] = texture.rgb[m as usize];
             weight[i] = MIRROR_WEIGHT * texture.confidence[m as usize];
             source[i] = FillSource::Mirrored;
-        } else if let Some(Some(colour)) = behind.get(i) {
+        } else if let Some(Some((from, colour))) = guesses.get(i) {
             rgb[i] = *colour;
-            weight[i] = BEHIND_WEIGHT;
-            source[i] = FillSource::Behind;
+            weight[i] = GUESS_WEIGHT;
+            source[i] = *from;
         }
     }
     if weight.iter().all(|&w| w <= 0.0) {

@@ -15,6 +15,7 @@ pub mod default_mode;
 pub mod displacement;
 pub mod extras;
 pub mod fill;
+pub mod hands;
 pub mod texture;
 pub mod uv_map;
 
@@ -69,6 +70,8 @@ pub struct Report {
     pub mirrored: usize,
     /// Texels of the back coloured from the front in front of them.
     pub behind: usize,
+    /// Texels of hands the photo does not show, coloured as the hand or the face's skin.
+    pub hands: usize,
     /// GUAVA mode: UV Gaussians dropped at opacity ≤ 0.001.
     pub pruned: usize,
     /// GUAVA mode: triangles that win at least one pixel of the source view.
@@ -143,11 +146,20 @@ pub fn reconstruct_default(
     report.observed = sampled.observed();
 
     clock.start(Stage::Fill, progress)?;
-    let behind = behind::behind(body, uv, &sampled);
-    let filled = fill::fill(uv, &sampled, &behind).ok_or(ReconstructError::NothingVisible)?;
-    let count = |of: fill::FillSource| filled.source.iter().filter(|&&s| s == of).count();
-    report.mirrored = count(fill::FillSource::Mirrored);
-    report.behind = count(fill::FillSource::Behind);
+    use fill::FillSource;
+    let guesses: Vec<_> = behind::behind(body, uv, &sampled)
+        .into_iter()
+        .zip(hands::unseen_hands(body, uv, &sampled))
+        .map(|(back, hand)| {
+            // An unseen hand is a hand on its back too, not the sleeve in front of it.
+            (hand.map(|c| (FillSource::Hand, c))).or(back.map(|c| (FillSource::Behind, c)))
+        })
+        .collect();
+    let filled = fill::fill(uv, &sampled, &guesses).ok_or(ReconstructError::NothingVisible)?;
+    let count = |of: FillSource| filled.source.iter().filter(|&&s| s == of).count();
+    report.mirrored = count(FillSource::Mirrored);
+    report.behind = count(FillSource::Behind);
+    report.hands = count(FillSource::Hand);
 
     clock.start(Stage::Gaussians, progress)?;
     let mut avatar = default_mode::build(

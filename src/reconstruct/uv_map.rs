@@ -93,6 +93,14 @@ impl UvMap {
             + b[1] * vertices[tri[1] as usize]
             + b[2] * vertices[tri[2] as usize]
     }
+
+    /// The corner of texel `i`'s triangle nearest it (largest barycentric): the vertex whose
+    /// labels (body part) the texel takes.
+    pub fn nearest_vertex(&self, i: usize, triangles: &[[u32; 3]]) -> usize {
+        let b = self.bary[i];
+        let k = (0..3).fold(0, |m, k| if b[k] > b[m] { k } else { m });
+        triangles[self.triangle[i] as usize][k] as usize
+    }
 }
 
 /// Positions closer than this (metres) are the same point for the mirror match.
