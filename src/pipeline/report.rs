@@ -55,6 +55,10 @@ pub struct Report {
     /// Default mode: texels of hands the photo does not show, coloured as the hand or the face's
     /// skin.
     pub hands: usize,
+    /// Default mode: how far hair stands off the head (metres), and the Gaussians of its shell
+    /// behind the head.
+    pub hair: f32,
+    pub hair_shell: usize,
     /// GUAVA mode: UV Gaussians dropped at opacity ≤ 0.001.
     pub pruned: usize,
     /// Default mode: Gaussians made for the person's pixels the body does not cover.
@@ -76,6 +80,8 @@ impl Report {
         self.mirrored = core.mirrored;
         self.behind = core.behind;
         self.hands = core.hands;
+        self.hair = core.hair;
+        self.hair_shell = core.hair_shell;
         self.pruned = core.pruned;
         self.extras = core.extras;
         self.left_out = core.left_out;
@@ -187,6 +193,13 @@ impl Report {
                 self.left_out
             ),
         });
+        if self.networks.is_none() {
+            lines.push(format!(
+                "hair: {:.1} cm off the head around its outline, {} Gaussians behind the head",
+                self.hair * 100.0,
+                self.hair_shell
+            ));
+        }
         lines.push(format!("mask from {}", self.mask.describe()));
         lines.extend(self.notes.iter().cloned());
         for (stage, d) in &self.timings {

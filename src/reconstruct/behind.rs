@@ -50,19 +50,7 @@ pub fn behind(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Vec<Option<[
     let Some(mut front) = FrontImage::new(&points, texture) else {
         return out;
     };
-    // The crown: the seen head texels within CROWN of the highest seen one (a photo cut
-    // through the hair still shows its colour at its top edge).
-    let top = points
-        .iter()
-        .filter(|p| p.3 && seen(p.0))
-        .map(|p| p.1.y)
-        .fold(f32::MIN, f32::max);
-    let crown: Vec<[f32; 3]> = points
-        .iter()
-        .filter(|p| p.3 && p.1.y >= top - CROWN && seen(p.0))
-        .map(|p| texture.rgb[p.0])
-        .collect();
-    let crown = median(crown);
+    let crown = crown(body, uv, texture);
     for &(i, point, normal, head) in &points {
         if seen(i) {
             continue;
@@ -75,6 +63,28 @@ pub fn behind(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Vec<Option<[
         };
     }
     out
+}
+
+/// The crown's colour: the median of the seen head texels within [`CROWN`] of the highest seen
+/// one (a photo cut through the hair still shows its colour at its top edge); `None` where the
+/// photo shows no head.
+pub fn crown(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Option<[f32; 3]> {
+    let seen_head: Vec<(usize, f32)> = uv
+        .texels
+        .iter()
+        .map(|&t| t as usize)
+        .filter(|&i| texture.confidence[i] > 0.0)
+        .filter(|&i| body.part_of(uv.nearest_vertex(i, &body.triangles)) == Some("head"))
+        .map(|i| (i, uv.point(i, &body.vertices, &body.triangles).y))
+        .collect();
+    let top = seen_head.iter().map(|p| p.1).fold(f32::MIN, f32::max);
+    median(
+        seen_head
+            .iter()
+            .filter(|p| p.1 >= top - CROWN)
+            .map(|p| texture.rgb[p.0])
+            .collect(),
+    )
 }
 
 /// The seen texels facing the front, drawn orthographically from the front in the rest pose:

@@ -166,15 +166,15 @@ pub fn extras(
 type Skinning = ([u32; 4], [f32; 4]);
 
 /// What an extra Gaussian is besides where: its scale (metres), opacity and features.
-struct Extra {
-    scale: [f32; 3],
-    opacity: f32,
-    features: [f32; 4],
+pub(super) struct Extra {
+    pub(super) scale: [f32; 3],
+    pub(super) opacity: f32,
+    pub(super) features: [f32; 4],
 }
 
 /// Appends `extra` at `point` with `rotation` in the world, skinned by `(v, w)`; nothing where
 /// their blended skinning is degenerate.
-fn push(
+pub(super) fn push(
     out: &mut SkinnedGaussians,
     point: Vec3,
     (v, w): ([u32; 4], [f32; 4]),

@@ -15,6 +15,7 @@ pub mod default_mode;
 pub mod displacement;
 pub mod extras;
 pub mod fill;
+pub mod hair;
 pub mod hands;
 pub mod texture;
 pub mod uv_map;
@@ -80,6 +81,10 @@ pub struct Report {
     pub extras: usize,
     /// Default mode: UV Gaussians on parts the photo did not show (greyed, drawn on request).
     pub left_out: usize,
+    /// Default mode: how far hair stands off the head (metres) as the photo's outline shows it,
+    /// and the Gaussians of the hair's shell behind the head (among [`Report::extras`]).
+    pub hair: f32,
+    pub hair_shell: usize,
     /// Default mode: the clothing layer's fit, when the photo had a person mask.
     pub dressed: Option<displacement::DisplacementReport>,
 }
@@ -176,6 +181,20 @@ pub fn reconstruct_default(
 
     clock.start(Stage::Extras, progress)?;
     avatar.skinned = extras::extras(&photo, &fragments, body, &posed.vertices, &posed, camera);
+    // Hair's volume behind the head, in the crown's colour (the back of the head's).
+    if let (Some(mask), Some(crown)) = (&photo.mask, behind::crown(body, uv, &sampled)) {
+        report.hair = hair::thickness(body, &posed.vertices, &posed, camera, mask);
+        report.hair_shell = hair::shell(
+            &mut avatar.skinned,
+            body,
+            &posed.vertices,
+            &posed,
+            camera,
+            &fragments,
+            report.hair,
+            crown,
+        );
+    }
     report.extras = avatar.skinned.len();
     report.left_out = leave_out(&mut avatar, &posed.vertices, &body.triangles, camera);
     report.timings = clock.finish();
