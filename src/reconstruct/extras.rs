@@ -39,7 +39,7 @@ const RADIUS_PX: f32 = 0.6;
 /// Extra Gaussians are opaque where the mask is sure, as the body's discs are.
 const OPACITY: f32 = 0.95;
 /// A pixel belongs to the person at this mask value.
-const PERSON: f32 = 0.5;
+pub(super) const PERSON: f32 = 0.5;
 /// Body vertices a Gaussian is skinned by, at most, and how far they may be (metres); past it
 /// the nearest few are taken from further out.
 const ANCHORS: usize = 4;

@@ -12,7 +12,7 @@
 
 use glam::{Mat3A, Vec2, Vec3};
 
-use super::extras::{Extra, push};
+use super::extras::{Extra, PERSON, push};
 use super::hands::FACE_BELOW;
 use crate::avatar::{SkinnedGaussians, quat_from_matrix};
 use crate::body::{BodyModel, PosedBody};
@@ -27,8 +27,6 @@ pub const MAX_HAIR: f32 = 0.05;
 const FULL_FACING: f32 = 0.5;
 /// Columns either side of each outermost head point whose runs of hair give the median.
 const COLUMNS: i32 = 4;
-/// A pixel belongs to the person at this mask value.
-const PERSON: f32 = 0.5;
 /// A shell disc's standard deviation across, in its vertex's longest edges, and along its
 /// normal (metres).
 const ACROSS: f32 = 0.6;
