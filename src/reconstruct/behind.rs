@@ -27,8 +27,14 @@ const FACING_BACK: f32 = -0.2;
 const CROWN: f32 = 0.03;
 
 /// Per texel of `uv`: a colour for the back where one can be said, else `None` (seen texels,
-/// texels facing the front or the sides, back texels 30 cm from anything the front shows).
-pub fn behind(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Vec<Option<[f32; 3]>> {
+/// texels facing the front or the sides, back texels 30 cm from anything the front shows); the
+/// back of the head takes `crown` ([`crown`]).
+pub fn behind(
+    body: &BodyModel,
+    uv: &UvMap,
+    texture: &UvTexture,
+    crown: Option<[f32; 3]>,
+) -> Vec<Option<[f32; 3]>> {
     let n = (uv.size * uv.size) as usize;
     let mut out = vec![None; n];
     let normals = body.normals_of(&body.vertices);
@@ -50,7 +56,6 @@ pub fn behind(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Vec<Option<[
     let Some(mut front) = FrontImage::new(&points, texture) else {
         return out;
     };
-    let crown = crown(body, uv, texture);
     for &(i, point, normal, head) in &points {
         if seen(i) {
             continue;
@@ -224,7 +229,7 @@ mod tests {
                 texture.confidence[i] = 1.0;
             }
         }
-        let filled = behind(&body, &uv, &texture);
+        let filled = behind(&body, &uv, &texture, crown(&body, &uv, &texture));
         let (mut below, mut below_filled, mut heads) = (0, 0, 0);
         for &t in &uv.texels {
             let i = t as usize;

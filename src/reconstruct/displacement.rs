@@ -189,10 +189,7 @@ fn group_priors(
             || match body.part_of(v) {
                 Some("body") | Some("foot.L") | Some("foot.R") | None => false,
                 // The face: the head's front below the hairline; the scalp may wear hair.
-                Some("head") => head.is_some_and(|h| {
-                    let p = body.vertices[v] - h;
-                    p.z > super::hands::FACE_FRONT && p.y < super::hands::FACE_BELOW
-                }),
+                Some("head") => head.is_some_and(|h| super::hands::on_face(h, body.vertices[v])),
                 Some(_) => true,
             };
         if bare && prior[g as usize] < BARE_PRIOR {

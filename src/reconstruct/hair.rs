@@ -43,13 +43,7 @@ const SKULL_BELOW: f32 = 0.02;
 /// head's outline above the crown and beside the head above the hairline, over a few columns
 /// each, where the photo shows them whole (a run cut by the photo's edge says nothing); 0
 /// without any.
-pub fn thickness(
-    body: &BodyModel,
-    vertices: &[Vec3],
-    posed: &PosedBody,
-    camera: &Camera,
-    mask: &[f32],
-) -> f32 {
+pub fn thickness(body: &BodyModel, posed: &PosedBody, camera: &Camera, mask: &[f32]) -> f32 {
     let Some(j) = body.joint_index("head") else {
         return 0.0;
     };
@@ -87,7 +81,7 @@ pub fn thickness(
     let from = centre.truncate();
     let outermost = |dir: Vec2| {
         head_vertices(body)
-            .map(|v| vertices[v])
+            .map(|v| posed.vertices[v])
             .filter(|p| dir == up || p.y > hairline)
             .map(|p| camera.project(p).truncate())
             .max_by(|a, b| (*a - from).dot(dir).total_cmp(&(*b - from).dot(dir)))
@@ -106,15 +100,13 @@ pub fn thickness(
 }
 
 /// Appends to `out` the shell of `colour` discs `hair` metres behind the head of the posed,
-/// dressed body (`vertices`, `posed`) seen by `camera`, each skinned by its head vertex, on the
+/// dressed body `posed` seen by `camera`, each skinned by its head vertex, on the
 /// skull's far half above the ears only, and only where the body hides the disc from the photo's
 /// camera (`fragments`: the body's rasterization from it), so the photo's view keeps what the
 /// photo shows. Returns how many.
-#[allow(clippy::too_many_arguments)]
 pub fn shell(
     out: &mut SkinnedGaussians,
     body: &BodyModel,
-    vertices: &[Vec3],
     posed: &PosedBody,
     camera: &Camera,
     fragments: &Fragments,
@@ -133,6 +125,7 @@ pub fn shell(
     if hair <= 0.0 || head.is_empty() {
         return 0;
     }
+    let vertices = &posed.vertices;
     let middle = head.iter().map(|&v| vertices[v]).sum::<Vec3>() / head.len() as f32;
     // Each vertex's spacing: its longest edge (the skull's back is meshed far coarser than the
     // face; one spacing for all left gaps between the discs there).

@@ -7,6 +7,8 @@
 //! gives for a hand. A hand it shows well is left to the inpainting, which spreads its own
 //! colours (a glove stays a glove).
 
+use glam::Vec3;
+
 use super::behind::median;
 use super::texture::UvTexture;
 use super::uv_map::UvMap;
@@ -17,11 +19,16 @@ const HANDS: [&str; 2] = ["hand.L", "hand.R"];
 /// A hand whose texels are seen (directly or through its mirror) less than this share of them
 /// has the rest of its colour guessed; above it, the inpainting spreads its own colours.
 const SEEN_SHARE: f32 = 0.1;
-/// The face: head vertices this far in front of the head joint (metres, rest pose) and below
+/// The face: head points this far in front of the head joint (metres, rest pose) and below
 /// this height above it (the forehead below the hairline; higher is the scalp, which may wear
 /// hair). The same bounds hold the clothing layer off the face.
-pub const FACE_FRONT: f32 = 0.02;
+const FACE_FRONT: f32 = 0.02;
 pub const FACE_BELOW: f32 = 0.06;
+
+/// Whether a head point at `p` (rest pose) is the face, the head joint resting at `head`.
+pub fn on_face(head: Vec3, p: Vec3) -> bool {
+    p.z - head.z > FACE_FRONT && p.y - head.y < FACE_BELOW
+}
 
 /// Per texel of `uv`: for the unseen texels (neither they nor their mirror images seen) of a hand
 /// the photo shows less than [`SEEN_SHARE`] of, the median of what it shows of that hand, or the
@@ -39,7 +46,7 @@ pub fn unseen_hands(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Vec<Op
             .filter(|&i| seen(i) && part(i) == Some("head"))
             .filter(|&i| {
                 let p = uv.point(i, &body.vertices, &body.triangles);
-                head.is_some_and(|h| p.z - h.z > FACE_FRONT && p.y - h.y < FACE_BELOW)
+                head.is_some_and(|h| on_face(h, p))
             })
             .map(|i| texture.rgb[i])
             .collect(),

@@ -152,7 +152,8 @@ pub fn reconstruct_default(
 
     clock.start(Stage::Fill, progress)?;
     use fill::FillSource;
-    let guesses: Vec<_> = behind::behind(body, uv, &sampled)
+    let crown = behind::crown(body, uv, &sampled);
+    let guesses: Vec<_> = behind::behind(body, uv, &sampled, crown)
         .into_iter()
         .zip(hands::unseen_hands(body, uv, &sampled))
         .map(|(back, hand)| {
@@ -182,12 +183,11 @@ pub fn reconstruct_default(
     clock.start(Stage::Extras, progress)?;
     avatar.skinned = extras::extras(&photo, &fragments, body, &posed.vertices, &posed, camera);
     // Hair's volume behind the head, in the crown's colour (the back of the head's).
-    if let (Some(mask), Some(crown)) = (&photo.mask, behind::crown(body, uv, &sampled)) {
-        report.hair = hair::thickness(body, &posed.vertices, &posed, camera, mask);
+    if let (Some(mask), Some(crown)) = (&photo.mask, crown) {
+        report.hair = hair::thickness(body, &posed, camera, mask);
         report.hair_shell = hair::shell(
             &mut avatar.skinned,
             body,
-            &posed.vertices,
             &posed,
             camera,
             &fragments,
