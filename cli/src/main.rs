@@ -174,7 +174,8 @@ enum Command {
         #[arg(long)]
         ehm: Option<PathBuf>,
         /// Also write the photo, the render and their difference side by side as PNG (with
-        /// --video or --frames: a folder of them, one per compared frame, and compare.mp4).
+        /// --video or --frames: a folder of them, one per compared frame, and compare.mp4; with
+        /// --video and no --avatar, also the avatar made, as avatar.guava).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Also LPIPS, with this ONNX model (tools/export_lpips_onnx.py makes LPIPS-Alex, the

@@ -406,6 +406,13 @@ impl Eval<'_> {
             outcome.avatar.kind.label(),
             outcome.avatar.len()
         );
+        // Kept beside the compared frames, so the avatar they score can be opened and turned.
+        if let Some(dir) = self.out {
+            std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+            let path = dir.join("avatar.guava");
+            outcome.avatar.save(&path)?;
+            eprintln!("  avatar → {}", path.display());
+        }
         self.on(outcome.avatar, &body)
     }
 
