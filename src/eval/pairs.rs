@@ -16,7 +16,7 @@ use glam::Vec3;
 use crate::body::{BodyModel, BodyPose, Posable, PoseError};
 use crate::camera::{Camera, GUAVA_INVTANFOV};
 use crate::eval::metrics::{Metrics, compare, person_box};
-use crate::eval::subjects::{SubjectError, reconstruct_subject_as};
+use crate::eval::subjects::{SubjectError, front_view, reconstruct_subject_as};
 use crate::eval::{interleaved_rgb, render_view};
 use crate::pipeline::Pipeline;
 use crate::render::{HeadlessRenderer, SplatImage};
@@ -265,7 +265,8 @@ pub fn make(
     let subject = subject(spec.kind, body);
     let texture = seeded_texture(spec.seed);
     let rest = rest_of(body, spec)?;
-    let outcome = reconstruct_subject_as(pipeline, &subject, &texture, rest.clone())?;
+    let outcome =
+        reconstruct_subject_as(pipeline, &subject, &texture, front_view(body, rest.clone()))?;
     let motion = demo_motion()?;
     let retarget = Retarget::new(&motion, body);
     for view in &spec.views {

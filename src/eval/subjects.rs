@@ -47,26 +47,30 @@ pub fn reconstruct_subject(
     subject: &Subject,
     texture: impl Fn(Vec3, Material) -> [f32; 3],
 ) -> Result<Outcome, SubjectError> {
-    reconstruct_subject_as(pipeline, subject, texture, BodyPose::rest(subject.body))
+    let view = front_view(subject.body, BodyPose::rest(subject.body));
+    reconstruct_subject_as(pipeline, subject, texture, view)
 }
 
-/// [`reconstruct_subject`] with the body's shape given: photographed in `rest` (the rest pose
-/// with shape coefficients).
+/// The front photo's view of a subject in `pose`: [`upper_body_camera`] from straight ahead.
+pub fn front_view(body: &BodyModel, pose: BodyPose) -> SourceView {
+    SourceView {
+        pose,
+        camera: upper_body_camera(body, 0.0),
+        crop: None,
+    }
+}
+
+/// [`reconstruct_subject`] photographed as `view` says (a pose with shape coefficients, another
+/// camera), the view given to the reconstruction.
 pub fn reconstruct_subject_as(
     pipeline: &mut Pipeline,
     subject: &Subject,
     texture: impl Fn(Vec3, Material) -> [f32; 3],
-    rest: BodyPose,
+    view: SourceView,
 ) -> Result<Outcome, SubjectError> {
-    let body: &BodyModel = subject.body;
-    let view = SourceView {
-        pose: rest,
-        camera: upper_body_camera(body, 0.0),
-        crop: None,
-    };
     let photo = subject.photo(&view.pose, &view.camera, texture)?;
     Ok(pipeline.reconstruct(
-        Mode::Default(body),
+        Mode::Default(subject.body),
         Photo::Pixels {
             name: subject.name,
             pixels: photo,

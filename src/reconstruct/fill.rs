@@ -20,6 +20,8 @@ pub enum FillSource {
     /// A hand's part the photo does not show, from what it shows of the hand or the face's
     /// skin ([`super::hands`]).
     Hand,
+    /// The body below the photo's bottom edge, from what the edge shows ([`super::past_edge`]).
+    PastEdge,
     Inpainted,
 }
 
@@ -39,8 +41,8 @@ pub struct FilledTexture {
 }
 
 /// Fills `texture` over the valid texels of `uv`, with `guesses` (a colour and what it came
-/// from: [`FillSource::Behind`] or [`FillSource::Hand`]) where neither the texel nor its mirror
-/// image was seen. Returns `None` if no texel was observed.
+/// from: [`FillSource::Behind`], [`FillSource::Hand`] or [`FillSource::PastEdge`]) where neither
+/// the texel nor its mirror image was seen. Returns `None` if no texel was observed.
 pub fn fill(
     uv: &UvMap,
     texture: &UvTexture,

@@ -17,6 +17,7 @@ pub mod extras;
 pub mod fill;
 pub mod hair;
 pub mod hands;
+pub mod past_edge;
 pub mod texture;
 pub mod uv_map;
 
@@ -73,6 +74,8 @@ pub struct Report {
     pub behind: usize,
     /// Texels of hands the photo does not show, coloured as the hand or the face's skin.
     pub hands: usize,
+    /// Texels of the body below the photo's bottom edge, coloured as the edge shows the person there.
+    pub past_edge: usize,
     /// GUAVA mode: UV Gaussians dropped at opacity ≤ 0.001.
     pub pruned: usize,
     /// GUAVA mode: triangles that win at least one pixel of the source view.
@@ -153,12 +156,25 @@ pub fn reconstruct_default(
     clock.start(Stage::Fill, progress)?;
     use fill::FillSource;
     let crown = behind::crown(body, uv, &sampled);
+    let past = past_edge::past_edge(
+        body,
+        uv,
+        &posed.vertices,
+        camera,
+        &photo,
+        &fragments,
+        &sampled,
+    );
     let guesses: Vec<_> = behind::behind(body, uv, &sampled, crown)
         .into_iter()
         .zip(hands::unseen_hands(body, uv, &sampled))
-        .map(|(back, hand)| {
-            // An unseen hand is a hand on its back too, not the sleeve in front of it.
-            (hand.map(|c| (FillSource::Hand, c))).or(back.map(|c| (FillSource::Behind, c)))
+        .zip(past)
+        .map(|((back, hand), past)| {
+            // An unseen hand is a hand on its back too, not the sleeve in front of it; below the
+            // photo's bottom edge the back goes on with what the edge shows, as the front does.
+            (hand.map(|c| (FillSource::Hand, c)))
+                .or(past.map(|c| (FillSource::PastEdge, c)))
+                .or(back.map(|c| (FillSource::Behind, c)))
         })
         .collect();
     let filled = fill::fill(uv, &sampled, &guesses).ok_or(ReconstructError::NothingVisible)?;
@@ -166,6 +182,7 @@ pub fn reconstruct_default(
     report.mirrored = count(FillSource::Mirrored);
     report.behind = count(FillSource::Behind);
     report.hands = count(FillSource::Hand);
+    report.past_edge = count(FillSource::PastEdge);
 
     clock.start(Stage::Gaussians, progress)?;
     let mut avatar = default_mode::build(

@@ -1,0 +1,110 @@
+//! Colours for the body below the photo's bottom edge (default mode). A portrait or a video
+//! frame often cuts the person at the chest; left to the inpainting, the body below the cut took
+//! the colours nearest it in the UV layout (the neck's skin among them), so turned views showed a
+//! bare torso under a black top. Here each unseen texel whose point the photo's camera places
+//! below the bottom edge takes what the photo shows at that edge, straight above it: the median of
+//! the person pixels in a window on the edge (a top goes on below the cut). Only the bottom edge:
+//! past a side, a window on the edge mixes a sleeve with the hand beside it (the synthetic jacket's
+//! forearms took the hand's skin, 0.16 dB lost from the side), and above the top there is only the
+//! head. The head and the hands are left out (the back of the head takes the crown's colour,
+//! [`super::behind`]; a hand, [`super::hands`]'s), and the pixels where the photo shows them give
+//! nothing (a hand resting at the bottom edge is not the shirt below it).
+
+use std::collections::HashMap;
+
+use glam::Vec3;
+
+use super::behind::median;
+use super::extras::PERSON;
+use super::texture::UvTexture;
+use super::uv_map::UvMap;
+use crate::body::BodyModel;
+use crate::camera::Camera;
+use crate::photo::SourceImage;
+use crate::raster::Fragments;
+
+/// Half widths and depths (pixels of the 512² source) of the window on the edge, tried in turn
+/// until one holds a person pixel: a band about as deep as a collar at a close-up's scale, then
+/// wider.
+const WINDOW_RADII: [i32; 3] = [8, 16, 32];
+/// Windows are shared by the texels below one cell of the edge this many pixels wide.
+const CELL: i32 = 4;
+
+/// Per body vertex: whether it is the head's or a hand's, neither given nor giving colour here:
+/// the head and hand parts, and what a wrist moves most (the wrist itself, which the hand part
+/// leaves to the arm, is skin beside a sleeve's cuff as often as not).
+fn head_or_hand(body: &BodyModel) -> Vec<bool> {
+    let under_wrist: Vec<bool> = (0..body.joints.len())
+        .map(|j| {
+            std::iter::successors(Some(j), |&j| body.joints[j].parent)
+                .any(|j| body.joints[j].name.starts_with("wrist."))
+        })
+        .collect();
+    (0..body.vertices.len())
+        .map(|v| {
+            let (joints, weights) = (body.skin_joints[v], body.skin_weights[v]);
+            let most =
+                (0..joints.len()).fold(0, |m, k| if weights[k] > weights[m] { k } else { m });
+            under_wrist[joints[most] as usize]
+                || body
+                    .part_of(v)
+                    .is_none_or(|p| p == "head" || p.starts_with("hand."))
+        })
+        .collect()
+}
+
+/// Per texel of `uv`: for the unseen texels (not the head's, not the hands') whose point on the
+/// body posed at `vertices` lies below the bottom edge of `photo` as `camera` sees it, the median
+/// colour of the person pixels on that edge above it, leaving out those where `fragments` (the
+/// posed body rasterized from `camera`) shows the head or a hand; `None` elsewhere, and where the
+/// edge there shows no such person pixel within the widest window.
+pub fn past_edge(
+    body: &BodyModel,
+    uv: &UvMap,
+    vertices: &[Vec3],
+    camera: &Camera,
+    photo: &SourceImage,
+    fragments: &Fragments,
+    texture: &UvTexture,
+) -> Vec<Option<[f32; 3]>> {
+    let n = (uv.size * uv.size) as usize;
+    let mut out = vec![None; n];
+    let Some(mask) = &photo.mask else { return out };
+    let side = photo.size as i32;
+    let excluded = head_or_hand(body);
+    let mut edges: HashMap<i32, Option<[f32; 3]>> = HashMap::new();
+    for &t in &uv.texels {
+        let i = t as usize;
+        if texture.confidence[i] > 0.0 {
+            continue;
+        }
+        if excluded[uv.nearest_vertex(i, &body.triangles)] {
+            continue;
+        }
+        let q = camera.project(uv.point(i, vertices, &body.triangles));
+        if !q.is_finite() || q.z <= 0.0 || q.y < side as f32 {
+            continue;
+        }
+        let x = (q.x.floor() as i32).clamp(0, side - 1);
+        out[i] = *edges.entry(x / CELL).or_insert_with(|| {
+            let centre = x / CELL * CELL + CELL / 2;
+            WINDOW_RADII.iter().find_map(|&r| {
+                let mut colours = Vec::new();
+                for y in side - 1 - r..side {
+                    for x in (centre - r).max(0)..=(centre + r).min(side - 1) {
+                        let k = (y * side + x) as usize;
+                        let on_head_or_hand = usize::try_from(fragments.triangle[k])
+                            .is_ok_and(|t| excluded[body.triangles[t][0] as usize]);
+                        let (rgb, m) = photo.pixel(k);
+                        if mask[k] >= PERSON && !on_head_or_hand {
+                            // The photo is premultiplied by its mask.
+                            colours.push(rgb.map(|c| (c / m).min(1.0)));
+                        }
+                    }
+                }
+                median(colours)
+            })
+        });
+    }
+    out
+}
