@@ -2,9 +2,13 @@
 //! frame's pose is known is tracked back to it, the filters take jitter out, and videos that
 //! cannot be read are refused by name.
 
-use guava::body::BodyModel;
+use glam::{Mat4, Vec3};
+use guava::body::{BodyModel, BodyPose};
+use guava::camera::Camera;
 use guava::pipeline::Pipeline;
+use guava::synthetic::{portrait_camera, shaded_photo};
 use guava::track::{Jitter, TrackError, joint_errors, track_video};
+use guava::tracking::SourceView;
 use guava::video::{FrameList, FrameSource, VideoFrame};
 
 /// The demo motion from 1 s to 7.4 s at 5 fps (the jaw opening, a smile, the head turning, the
@@ -71,6 +75,60 @@ fn a_synthetic_video_is_tracked_to_its_known_pose() {
     println!("change per frame: raw {raw_jitter:?}, filtered {filtered_jitter:?}");
     assert!(filtered_jitter.rotation_deg < raw_jitter.rotation_deg);
     assert!(filtered_jitter.values < raw_jitter.values);
+}
+
+/// A person moving across the frame is drawn where they are, not where they were: the body at
+/// rest drawn through a portrait camera panning sideways at 15 cm a second (about 7 px a frame
+/// at 10 fps), tracked filtered. The root's rotation and the camera, which place the body as a
+/// whole, come from the fit of the filtered points unfiltered; when they were filtered apart
+/// (each lagging the other) the joints trailed the body by 14.7 px on average, against 5.1 px
+/// now and 4.5 px raw (the fit's own error on this drawing).
+#[test]
+fn a_person_moving_across_the_frame_is_tracked_without_lag() {
+    let body = BodyModel::default_body().expect("body");
+    let fps = 10.0;
+    let base = portrait_camera(&body, 0.0);
+    let (frames, truth): (Vec<_>, Vec<_>) = (0..20)
+        .map(|i| {
+            let time_s = f64::from(i) / f64::from(fps);
+            let shift = Mat4::from_translation(Vec3::X * (0.15 * time_s as f32));
+            let camera = Camera {
+                view_from_world: shift * base.view_from_world,
+                ..base
+            };
+            let pose = BodyPose::rest(&body);
+            let pixels = shaded_photo(&body, &pose, &camera).expect("drawn");
+            let view = SourceView {
+                pose,
+                camera,
+                crop: None,
+            };
+            (
+                VideoFrame {
+                    index: i as usize,
+                    time_s,
+                    pixels,
+                },
+                view,
+            )
+        })
+        .unzip();
+    let mut source = FrameList::new("synthetic pan", fps, frames);
+    let outcome = track_video(
+        &mut source,
+        &body,
+        &mut Pipeline::default(),
+        &[false, true],
+        &mut |_, _| true,
+    )
+    .expect("tracked");
+    let mean = |tracking| {
+        let errors = joint_errors(&body, &truth, tracking).expect("compared");
+        errors.iter().sum::<f32>() / errors.len() as f32
+    };
+    let (raw, filtered) = (mean(&outcome.tracks[0]), mean(&outcome.tracks[1]));
+    println!("joints off by {raw:.1} px raw, {filtered:.1} px filtered");
+    assert!(filtered < raw + 2.0, "filtered {filtered} px, raw {raw} px");
 }
 
 /// What cannot be read is refused with the file's name and what is wrong, before any frame.

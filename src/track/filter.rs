@@ -41,12 +41,6 @@ impl OneEuroSettings {
         beta: 2.0,
         d_cutoff: 1.0,
     };
-    /// The camera's translation, speed in the camera's depths per second.
-    pub const CAMERA: Self = Self {
-        min_cutoff: 0.5,
-        beta: 20.0,
-        d_cutoff: 1.0,
-    };
 
     /// The smoothing factor of a low-pass at `cutoff` Hz for samples `dt` seconds apart.
     fn alpha(cutoff: f64, dt: f64) -> f64 {
