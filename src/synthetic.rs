@@ -286,13 +286,8 @@ struct PosedMesh {
 
 /// Each vertex's most weighted joint's name.
 fn dominant_joints(body: &BodyModel) -> Vec<&str> {
-    body.skin_joints
-        .iter()
-        .zip(&body.skin_weights)
-        .map(|(js, ws)| {
-            let k = (0..js.len()).fold(0, |m, k| if ws[k] > ws[m] { k } else { m });
-            body.joints[js[k] as usize].name.as_str()
-        })
+    (0..body.vertices.len())
+        .map(|v| body.joints[body.dominant_joint(v)].name.as_str())
         .collect()
 }
 

@@ -456,7 +456,7 @@ impl Eval<'_> {
             // A frame's alpha, where it has one (frames written with a person mask), is the mask.
             let has_alpha = frame.pixels.pixels().any(|p| p[3] < u8::MAX);
             let size = frame.pixels.dimensions();
-            let photo = self.pipeline.masked_photo(
+            let mut photo = self.pipeline.masked_photo(
                 Photo::Pixels {
                     name: &label,
                     pixels: frame.pixels,
@@ -470,9 +470,9 @@ impl Eval<'_> {
                 &mut self.renderer,
                 avatar,
                 body,
-                Some(&view),
-                &photo,
-                Some([size.0, size.1]),
+                &view,
+                &mut photo,
+                [size.0, size.1],
             )
             .with_context(|| label.clone())?;
             let d = match self.lpips.as_mut() {

@@ -173,6 +173,13 @@ impl BodyModel {
             .collect()
     }
 
+    /// The joint that moves vertex `v` most (its largest skinning weight).
+    pub fn dominant_joint(&self, v: usize) -> usize {
+        let (joints, weights) = (&self.skin_joints[v], &self.skin_weights[v]);
+        let k = (0..joints.len()).fold(0, |m, k| if weights[k] > weights[m] { k } else { m });
+        joints[k] as usize
+    }
+
     /// The body-part name of vertex `v` (`None` when the template has no part labels).
     pub fn part_of(&self, v: usize) -> Option<&str> {
         let &p = self.vertex_parts.get(v)?;

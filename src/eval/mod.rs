@@ -146,38 +146,26 @@ pub fn evaluate(
     view: Option<&SourceView>,
     photo: &SourceImage,
 ) -> Result<(Metrics, SplatImage), EvalError> {
-    evaluate_in_frame(renderer, avatar, body, view, photo, None)
+    let (_, rendered) = render_at(renderer, avatar, body, view, photo.size)?;
+    Ok((compare(&rendered, photo)?, rendered))
 }
 
-/// [`evaluate`] of a `photo` cut by the view's crop from a `[width, height]` video frame
-/// (`frame`): where the square leaves the frame (padding) the photo holds no pixels, and what
-/// the avatar draws there is not compared (it counted against the silhouette's IoU as if the
-/// frame showed background there).
+/// [`evaluate`] of a `photo` cut by `view`'s crop from a `[width, height]` video frame. Where
+/// the square leaves the frame (padding) the photo holds no pixels: the render and `photo` are
+/// both cleared there, so the padding is in neither silhouette nor the person's box (it counted
+/// against the IoU as background, and in the box as near-black matches), and what is compared
+/// next with them (LPIPS, the side-by-side) sees the same.
 pub fn evaluate_in_frame(
     renderer: &mut HeadlessRenderer,
     avatar: &Avatar,
     body: &impl Posable,
-    view: Option<&SourceView>,
-    photo: &SourceImage,
-    frame: Option<[u32; 2]>,
+    view: &SourceView,
+    photo: &mut SourceImage,
+    [width, height]: [u32; 2],
 ) -> Result<(Metrics, SplatImage), EvalError> {
-    let mut view = view
-        .or(avatar.source_view.as_ref())
-        .ok_or(EvalError::NoSourceView)?
-        .clone();
-    // GUAVA mode's camera is at its networks' image size; the photo is compared at its own.
-    view.camera = view
-        .camera
-        .scaled(photo.size as f32 / view.camera.width.max(1) as f32);
-    let mut rendered = render_view(renderer, avatar, body, &view)?;
-    let Some([width, height]) = frame else {
-        return Ok((compare(&rendered, photo)?, rendered));
-    };
-    // The padding holds no photo: cleared in both, it is in neither silhouette nor the person's
-    // box, so it is not compared at all.
+    let (view, mut rendered) = render_at(renderer, avatar, body, Some(view), photo.size)?;
     let crop = view.crop.unwrap_or(Crop::centred(width, height));
     let outside = outside_frame(crop, width, height, photo.size);
-    let mut photo = photo.clone();
     let n = outside.len();
     for i in (0..n).filter(|&i| outside[i]) {
         rendered.alpha[i] = 0.0;
@@ -190,7 +178,27 @@ pub fn evaluate_in_frame(
             mask[i] = 0.0;
         }
     }
-    Ok((compare(&rendered, &photo)?, rendered))
+    Ok((compare(&rendered, photo)?, rendered))
+}
+
+/// `avatar` rendered from its own source view (or `view` when given) at `size`², and the view.
+fn render_at(
+    renderer: &mut HeadlessRenderer,
+    avatar: &Avatar,
+    body: &impl Posable,
+    view: Option<&SourceView>,
+    size: u32,
+) -> Result<(SourceView, SplatImage), EvalError> {
+    let mut view = view
+        .or(avatar.source_view.as_ref())
+        .ok_or(EvalError::NoSourceView)?
+        .clone();
+    // GUAVA mode's camera is at its networks' image size; the photo is compared at its own.
+    view.camera = view
+        .camera
+        .scaled(size as f32 / view.camera.width.max(1) as f32);
+    let rendered = render_view(renderer, avatar, body, &view)?;
+    Ok((view, rendered))
 }
 
 #[cfg(test)]

@@ -123,8 +123,8 @@ impl Report {
             ),
             None => format!(
                 "{} of {} texels seen, {} mirrored, {} on the back from the front, {} on unseen \
-                 parts of the hands, {} below the photo's edge, rest inpainted; {} Gaussians beyond the body; {} on \
-                 parts the photo did not show left out",
+                 parts of the hands, {} below the photo's edge, rest inpainted; {} Gaussians \
+                 beyond the body; {} on parts the photo did not show left out",
                 self.observed,
                 self.texels,
                 self.mirrored,

@@ -42,10 +42,7 @@ fn head_or_hand(body: &BodyModel) -> Vec<bool> {
         .collect();
     (0..body.vertices.len())
         .map(|v| {
-            let (joints, weights) = (body.skin_joints[v], body.skin_weights[v]);
-            let most =
-                (0..joints.len()).fold(0, |m, k| if weights[k] > weights[m] { k } else { m });
-            under_wrist[joints[most] as usize]
+            under_wrist[body.dominant_joint(v)]
                 || body
                     .part_of(v)
                     .is_none_or(|p| p == "head" || p.starts_with("hand."))
@@ -69,7 +66,9 @@ pub fn past_edge(
 ) -> Vec<Option<[f32; 3]>> {
     let n = (uv.size * uv.size) as usize;
     let mut out = vec![None; n];
-    let Some(mask) = &photo.mask else { return out };
+    if photo.mask.is_none() {
+        return out;
+    }
     let side = photo.size as i32;
     let excluded = head_or_hand(body);
     let mut edges: HashMap<i32, Option<[f32; 3]>> = HashMap::new();
@@ -96,7 +95,7 @@ pub fn past_edge(
                         let on_head_or_hand = usize::try_from(fragments.triangle[k])
                             .is_ok_and(|t| excluded[body.triangles[t][0] as usize]);
                         let (rgb, m) = photo.pixel(k);
-                        if mask[k] >= PERSON && !on_head_or_hand {
+                        if m >= PERSON && !on_head_or_hand {
                             // The photo is premultiplied by its mask.
                             colours.push(rgb.map(|c| (c / m).min(1.0)));
                         }
