@@ -3,18 +3,21 @@
 //! with that pixel's colour, at the depth of the nearest body surface the view does see.
 //!
 //! Each is skinned by the body around it ([`SkinnedGaussians`]), never bound rigidly to one
-//! triangle: up to four body vertices near it, weighted by distance, so it moves as the surface
-//! around it does, as clothed-avatar methods diffuse skinning weights off the body. Which
-//! vertices: cloth between an arm and the torso below the shoulder (a jacket's sides beside a
-//! hanging arm) takes the torso's alone, so it stays with the torso when the arm swings instead
-//! of flapping with it like a wing (the demo portrait's suit did); elsewhere the nearest, arm or
-//! not (a sleeve follows its arm, hair its head). What lies past the body's reach (a held
-//! object) rides the body surface seen beside it, as one piece: each connected part takes the
-//! skinning of its pixel nearest the body.
+//! triangle, as clothed-avatar methods diffuse skinning weights off the body. Which body: cloth
+//! between an arm and the torso below the shoulder (a jacket's sides beside a hanging arm) takes
+//! the torso's alone, so it stays with the torso when the arm swings instead of flapping with it
+//! like a wing (the demo portrait's suit did); hair takes the skull's, the neck's and the
+//! torso's, never the face's (which expressions move) nor the arms'; elsewhere the nearest
+//! vertices, arm or not (a sleeve follows its arm). Depth and skinning weights (over joints) are
+//! then averaged over a window of neighbouring pixels, so neighbours move together: per pixel,
+//! by the body pixel nearest each, long hair tore into cracks along the rows where that jumped
+//! from the jaw to the neck. Each joint is carried by the vertex nearest the Gaussian that moves
+//! with it alone. What lies past the body's reach (a held object) rides the body surface seen
+//! beside it, as one piece: each connected part takes the skinning of its pixel nearest the body.
 //!
-//! Each is a disc facing the source camera, one pixel wide, and as thick along the view as half
-//! its distance from that surface, up to [`MAX_DEPTH`] (thicker, a jacket's edge around the neck
-//! stood out as a collar from the side). Hair (what the head skins) is placed at the head's
+//! Each is a disc facing the source camera, under a pixel wide, and as thick along the view as
+//! half its distance from that surface, up to [`MAX_DEPTH`] (thicker, a jacket's edge around the
+//! neck stood out as a collar from the side). Hair (what the head skins) is placed at the head's
 //! middle depth instead and stands only [`HAIR_DEPTH`] deep along the view: at the nearest
 //! surface's depth, the hair above and beside the face was a flat brim in front of the forehead
 //! seen from the side, and deeper discs drew horizontal streaks; from the front it looks the same
@@ -23,7 +26,7 @@
 use glam::{Mat3A, Vec3};
 
 use crate::avatar::{SkinnedGaussians, blend, quat_from_matrix, quat_mul};
-use crate::body::{BodyModel, PosedBody};
+use crate::body::{BodyModel, PosedBody, TargetGroup};
 use crate::camera::Camera;
 use crate::photo::SourceImage;
 use crate::photo::distance::{connected_parts, nearest_seeds};
@@ -34,8 +37,12 @@ pub const MAX_DEPTH: f32 = 0.01;
 /// How deep hair stands along the view (standard deviation, metres): three of it reach from the
 /// head's middle to its front and back.
 pub const HAIR_DEPTH: f32 = 0.002;
-/// Standard deviation of a disc across the view, in pixels of the source.
-const RADIUS_PX: f32 = 0.6;
+/// Half the side of the window the depth and skinning are averaged over (pixels of the source).
+const SMOOTHING: usize = 16;
+/// Standard deviation of a disc across the view, in pixels of the source: a neighbour's disc
+/// drawn over a pixel adds 8 % of its colour there (at 0.6, 24 %, which blurred the hair's
+/// strands in the source view once neighbours stood at different depths).
+const RADIUS_PX: f32 = 0.45;
 /// Extra Gaussians are opaque where the mask is sure, as the body's discs are.
 const OPACITY: f32 = 0.95;
 /// A pixel belongs to the person at this mask value.
@@ -47,6 +54,11 @@ const REACH: f32 = 0.06;
 /// The distance falloff of the anchors' weights (metres): those within a few centimetres share
 /// the Gaussian about evenly, so it moves with the surface around it, not one vertex.
 const FALLOFF: f32 = 0.03;
+/// A vertex a face unit moves by more than this (metres) is the face's.
+const EXPRESSION_MOVES: f32 = 1e-4;
+/// A vertex stands for a joint when its weight for the joint is at least this share of the
+/// largest any vertex has.
+const RIGID: f32 = 0.9;
 /// Cloth this far below the shoulder joint and between the arm and the torso follows the torso.
 const BELOW_SHOULDER: f32 = 0.05;
 
@@ -90,9 +102,7 @@ pub fn extras(
         .view_from_world
         .transform_point3(anchors.head_middle)
         .z;
-    // Each pixel's Gaussian, where it stands and what skins it, and whether it rides the
-    // surface beside it (a held object, past the body's reach).
-    let mut placed: Vec<(usize, Vec3, Skinning, bool, Extra)> = Vec::new();
+    let mut found: Vec<Uncovered> = Vec::new();
     for (i, &m) in mask.iter().enumerate() {
         if m < PERSON || covered[i] {
             continue;
@@ -100,9 +110,7 @@ pub fn extras(
         let Some((_, q)) = nearest[i] else { continue };
         let q = q as usize;
         let z = fragments.depth[q];
-        let (x, y) = ((i % size) as f32 + 0.5, (i / size) as f32 + 0.5);
-        let point = camera.unproject(x, y, z);
-        let gap = camera.unproject((q % size) as f32 + 0.5, (q / size) as f32 + 0.5, z);
+        let point = camera.unproject((i % size) as f32 + 0.5, (i / size) as f32 + 0.5, z);
         let beside = body.triangles[fragments.triangle[q] as usize];
         let (skinning, held) = match anchors.near(point) {
             Some(skinning) => (skinning, false),
@@ -112,15 +120,75 @@ pub fn extras(
             },
         };
         let hair = skinning.0.iter().any(|&k| anchors.head[k as usize]);
-        let (point, skinning, along) = match hair {
-            true => {
-                let deeper = camera.unproject(x, y, middle.max(z));
-                match anchors.of(deeper, &beside) {
-                    Some(skinning) => (deeper, skinning, HAIR_DEPTH),
+        found.push(Uncovered {
+            pixel: i,
+            nearest: q,
+            depth: z,
+            skinning,
+            held,
+            hair,
+        });
+    }
+    // Depth and skinning, smoothed across what the body does not cover (held objects apart,
+    // they move as one piece below). Each pixel's nearest body pixel jumps, between the jaw's
+    // outline and the neck's say, centimetres apart in depth and with other vertices around it,
+    // and neighbouring pixels placed and skinned by those jumps tore apart into black cracks as
+    // soon as the head turned or nodded. So each pixel's skinning is taken as weights over joints
+    // (hair's diffused from the skull, neck and torso around it; the rest's its anchors'), and
+    // depth and weights are averaged over a window before it is placed.
+    let unproject =
+        |i: usize, z: f32| camera.unproject((i % size) as f32 + 0.5, (i / size) as f32 + 0.5, z);
+    let mut worn = vec![false; size * size];
+    for u in &found {
+        worn[u.pixel] = !u.held;
+    }
+    let window = Window::new(&worn, size, SMOOTHING);
+    // `found` is in pixel order, as the window's pixels are.
+    let worn: Vec<&Uncovered> = found.iter().filter(|u| !u.held).collect();
+    let depths: Vec<f32> = worn
+        .iter()
+        .map(|u| match u.hair {
+            true => middle.max(u.depth),
+            false => u.depth,
+        })
+        .collect();
+    let depths = window.means(&depths);
+    let joints: Vec<Vec<(u16, f32)>> = worn
+        .iter()
+        .zip(&depths)
+        .map(|(u, &z)| match u.hair {
+            true => anchors.hair_joints(unproject(u.pixel, z)),
+            false => anchors.joints_of(u.skinning.0.into_iter().zip(u.skinning.1)),
+        })
+        .collect();
+    let joints = window.mean_weights(&joints);
+    let mut smoothed = depths.into_iter().zip(joints);
+    let mut placed: Vec<(usize, Vec3, Skinning, bool, Extra)> = Vec::new();
+    for u in found {
+        let Uncovered {
+            pixel: i,
+            nearest: q,
+            depth: z,
+            skinning,
+            held,
+            hair,
+        } = u;
+        let m = mask[i];
+        // Half the way to the body beside it, along the view (cloth), or hair's own depth.
+        let along = match hair {
+            true => HAIR_DEPTH,
+            false => 0.5 * unproject(i, z).distance(unproject(q, z)),
+        };
+        let (point, skinning, z) = match held {
+            true => (unproject(i, z), skinning, z),
+            false => {
+                let (depth, joints) = smoothed.next().expect("one per worn pixel");
+                let point = unproject(i, depth);
+                match anchors.by_joints(point, &joints) {
+                    Some(skinning) => (point, skinning, depth),
                     None => continue,
                 }
             }
-            false => (point, skinning, 0.5 * point.distance(gap)),
         };
         let across = RADIUS_PX * camera.pixel_footprint(z);
         let along = along.clamp(across, MAX_DEPTH);
@@ -162,8 +230,115 @@ pub fn extras(
     out
 }
 
+/// The anchors' weight at distance `d` (before normalising).
+fn falloff(d: f32) -> f32 {
+    (-0.5 * (d / FALLOFF).powi(2)).exp().max(1e-6)
+}
+
+/// Means over a square window of the pixels of a mask (`inside`, `size`²), by summed-area
+/// tables over the box holding the mask.
+struct Window {
+    size: usize,
+    radius: usize,
+    /// The box: left, top, width, height.
+    bounds: [usize; 4],
+    /// The mask's pixels, row-major.
+    pixels: Vec<usize>,
+    /// How many of them each window holds, by pixel of `pixels`.
+    counts: Vec<u32>,
+}
+
+impl Window {
+    fn new(inside: &[bool], size: usize, radius: usize) -> Self {
+        let pixels: Vec<usize> = (0..inside.len()).filter(|&i| inside[i]).collect();
+        let (mut x0, mut y0, mut x1, mut y1) = (size, size, 0, 0);
+        for &i in &pixels {
+            let (x, y) = (i % size, i / size);
+            (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1));
+        }
+        let mut window = Self {
+            size,
+            radius,
+            bounds: [x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)],
+            pixels,
+            counts: Vec::new(),
+        };
+        let ones = vec![1.0; window.pixels.len()];
+        window.counts = window.sums(&ones).iter().map(|&c| c as u32).collect();
+        window
+    }
+
+    /// The window sums of `values` (one per pixel of the mask), at each pixel of the mask.
+    fn sums(&self, values: &[f32]) -> Vec<f64> {
+        let [x0, y0, w, h] = self.bounds;
+        let n = w + 1;
+        let mut table = vec![0.0f64; n * (h + 1)];
+        for (&i, &v) in self.pixels.iter().zip(values) {
+            table[(i / self.size - y0 + 1) * n + i % self.size - x0 + 1] = f64::from(v);
+        }
+        for y in 1..=h {
+            for x in 1..=w {
+                let k = y * n + x;
+                table[k] += table[k - 1] + table[k - n] - table[k - n - 1];
+            }
+        }
+        let r = self.radius;
+        let at = |x: usize, y: usize| table[y * n + x];
+        self.pixels
+            .iter()
+            .map(|&i| {
+                let (x, y) = (i % self.size - x0, i / self.size - y0);
+                let (a, b) = (x.saturating_sub(r), y.saturating_sub(r));
+                let (c, d) = ((x + r + 1).min(w), (y + r + 1).min(h));
+                at(c, d) - at(a, d) - at(c, b) + at(a, b)
+            })
+            .collect()
+    }
+
+    /// The window means of `values` (one per pixel of the mask).
+    fn means(&self, values: &[f32]) -> Vec<f32> {
+        let sums = self.sums(values);
+        sums.iter()
+            .zip(&self.counts)
+            .map(|(s, &c)| (s / f64::from(c.max(1))) as f32)
+            .collect()
+    }
+
+    /// [`Window::means`] of sparse joint weights, joint by joint.
+    fn mean_weights(&self, weights: &[Vec<(u16, f32)>]) -> Vec<Vec<(u16, f32)>> {
+        let mut used: Vec<u16> = weights.iter().flatten().map(|&(j, _)| j).collect();
+        used.sort_unstable();
+        used.dedup();
+        let mut out: Vec<Vec<(u16, f32)>> = vec![Vec::new(); weights.len()];
+        for &j in &used {
+            let plane: Vec<f32> = weights
+                .iter()
+                .map(|w| w.iter().find(|(k, _)| *k == j).map_or(0.0, |&(_, w)| w))
+                .collect();
+            for (o, w) in out.iter_mut().zip(self.means(&plane)) {
+                if w > 0.0 {
+                    o.push((j, w));
+                }
+            }
+        }
+        out
+    }
+}
+
 /// Body vertices that skin a point and their weights (summing to 1).
 type Skinning = ([u32; 4], [f32; 4]);
+
+/// A person pixel the body leaves uncovered: the body pixel nearest it and the depth there,
+/// what skins it there, whether it rides the surface beside it (a held object, past the body's
+/// reach) and whether it is hair (the head among what skins it).
+struct Uncovered {
+    pixel: usize,
+    nearest: usize,
+    depth: f32,
+    skinning: Skinning,
+    held: bool,
+    hair: bool,
+}
 
 /// What an extra Gaussian is besides where: its scale (metres), opacity and features.
 pub(super) struct Extra {
@@ -209,6 +384,12 @@ struct Anchors<'a> {
     /// Which vertices are the head's, and their middle (posed).
     head: Vec<bool>,
     head_middle: Vec3,
+    body: &'a BodyModel,
+    /// Which vertices hair may hang from ([`Anchors::hair_joints`]), and per joint the vertices
+    /// (of those that anchor) that move most nearly with it alone.
+    hangs_from: Vec<bool>,
+    rigid: Vec<Vec<u32>>,
+    rigid_for: Vec<Vec<u16>>,
     /// The torso's frame (its spine joint, posed) and each arm's shoulder, elbow and wrist in it.
     torso_from_world: glam::Affine3A,
     arms: Vec<[Vec3; 3]>,
@@ -294,7 +475,7 @@ impl Grid {
 }
 
 impl<'a> Anchors<'a> {
-    fn new(body: &BodyModel, vertices: &'a [Vec3], posed: &PosedBody) -> Self {
+    fn new(body: &'a BodyModel, vertices: &'a [Vec3], posed: &PosedBody) -> Self {
         let grid = Grid::new(vertices);
         // Joints in an arm: the roots and everything below them.
         let in_arm: Vec<bool> = (0..body.joints.len())
@@ -310,7 +491,7 @@ impl<'a> Anchors<'a> {
                 }
             })
             .collect();
-        let arm = body
+        let arm: Vec<bool> = body
             .skin_joints
             .iter()
             .zip(&body.skin_weights)
@@ -345,12 +526,47 @@ impl<'a> Anchors<'a> {
         let head: Vec<bool> = (0..vertices.len())
             .map(|k| body.part_of(k) == Some("head"))
             .collect();
+        // Vertices a face unit moves (the face, the jaw): hair does not follow expressions.
+        let mut expressive = vec![false; vertices.len()];
+        for (_, t) in body.targets_in(TargetGroup::Expression) {
+            for (&v, d) in t.vertices.iter().zip(&t.deltas) {
+                expressive[v as usize] |= d.length() > EXPRESSION_MOVES;
+            }
+        }
+        let hangs_from: Vec<bool> = (0..vertices.len())
+            .map(|k| !expressive[k] && !arm[k])
+            .collect();
+        let mut rigid = vec![Vec::new(); body.joints.len()];
+        let mut rigid_for = vec![Vec::new(); vertices.len()];
+        let mut most = vec![0.0f32; body.joints.len()];
+        for pass in 0..2 {
+            for k in (0..vertices.len()).step_by(ANCHOR_STRIDE) {
+                if expressive[k] {
+                    continue;
+                }
+                for (&j, &w) in body.skin_joints[k].iter().zip(&body.skin_weights[k]) {
+                    let j = j as usize;
+                    match pass {
+                        0 => most[j] = most[j].max(w),
+                        _ if w > 0.0 && w >= RIGID * most[j] => {
+                            rigid[j].push(k as u32);
+                            rigid_for[k].push(j as u16);
+                        }
+                        _ => {}
+                    }
+                }
+            }
+        }
         let (sum, count) = vertices
             .iter()
             .zip(&head)
             .filter(|(_, h)| **h)
             .fold((Vec3::ZERO, 0usize), |(s, n), (v, _)| (s + *v, n + 1));
         Self {
+            body,
+            hangs_from,
+            rigid,
+            rigid_for,
             vertices,
             grid,
             arm,
@@ -362,12 +578,7 @@ impl<'a> Anchors<'a> {
     }
 
     /// Up to [`ANCHORS`] vertices near `point` and their weights (summing to 1): within
-    /// [`REACH`], else three times as far, else [`Anchors::beside`]'s.
-    fn of(&self, point: Vec3, beside: &[u32]) -> Option<Skinning> {
-        self.near(point).or_else(|| self.beside(point, beside))
-    }
-
-    /// [`Anchors::of`] within [`REACH`], else three times as far; `None` past that.
+    /// [`REACH`], else three times as far; `None` past that.
     fn near(&self, point: Vec3) -> Option<Skinning> {
         let mut near = self.within(point, REACH);
         if near.is_empty() {
@@ -404,12 +615,92 @@ impl<'a> Anchors<'a> {
         }
         near.sort_by(|a, b| a.0.total_cmp(&b.0));
         near.truncate(ANCHORS);
-        let weight = |d: f32| (-0.5 * (d / FALLOFF).powi(2)).exp().max(1e-6);
-        let total: f32 = near.iter().map(|&(d, _)| weight(d)).sum();
+        let total: f32 = near.iter().map(|&(d, _)| falloff(d)).sum();
         let (mut v, mut w) = ([near[0].1; 4], [0.0; 4]);
         for (slot, &(d, k)) in near.iter().enumerate() {
             v[slot] = k;
-            w[slot] = weight(d) / total;
+            w[slot] = falloff(d) / total;
+        }
+        Some((v, w))
+    }
+
+    /// Joint weights for hair at `point`: the skinning weights of the body vertices hair may
+    /// hang from near it (the skull, the neck, the torso; not the face, which expressions move,
+    /// nor the arms), averaged with the anchors' distance falloff.
+    fn hair_joints(&self, point: Vec3) -> Vec<(u16, f32)> {
+        let hangs_from = |near: Vec<(f32, u32)>| -> Vec<(f32, u32)> {
+            near.into_iter()
+                .filter(|&(_, k)| self.hangs_from[k as usize])
+                .collect()
+        };
+        let mut near = hangs_from(self.within(point, REACH));
+        if near.is_empty() {
+            near = hangs_from(self.within(point, 3.0 * REACH));
+        }
+        let total: f32 = near.iter().map(|&(d, _)| falloff(d)).sum();
+        self.joints_of(near.into_iter().map(|(d, k)| (k, falloff(d) / total)))
+    }
+
+    /// The joint weights vertices `(k, share)` amount to: Σ share · k's skinning weights.
+    fn joints_of(&self, vertices: impl IntoIterator<Item = (u32, f32)>) -> Vec<(u16, f32)> {
+        let mut out: Vec<(u16, f32)> = Vec::new();
+        for (k, share) in vertices {
+            let k = k as usize;
+            let weights = self.body.skin_joints[k]
+                .iter()
+                .zip(&self.body.skin_weights[k]);
+            for (&j, &w) in weights {
+                match out.iter_mut().find(|(o, _)| *o == j) {
+                    Some((_, sum)) => *sum += share * w,
+                    None if w > 0.0 => out.push((j, share * w)),
+                    None => {}
+                }
+            }
+        }
+        out
+    }
+
+    /// A skinning for joint weights at `point`: the [`ANCHORS`] heaviest joints, each through
+    /// the vertex nearest `point` that moves (nearly) with that joint alone.
+    fn by_joints(&self, point: Vec3, joints: &[(u16, f32)]) -> Option<Skinning> {
+        let mut joints: Vec<(u16, f32)> = joints
+            .iter()
+            .copied()
+            .filter(|&(j, w)| w > 0.0 && !self.rigid[j as usize].is_empty())
+            .collect();
+        joints.sort_by(|a, b| b.1.total_cmp(&a.1));
+        joints.truncate(ANCHORS);
+        let total: f32 = joints.iter().map(|(_, w)| w).sum();
+        if joints.is_empty() || total <= 0.0 {
+            return None;
+        }
+        let (mut v, mut w) = ([0; 4], [0.0; 4]);
+        // The vertices within reach usually hold one for each joint; the joint's whole list
+        // is searched only when they do not.
+        let near = self.within(point, REACH);
+        for (slot, &(j, weight)) in joints.iter().enumerate() {
+            let closest = |candidates: &mut dyn Iterator<Item = (f32, u32)>| {
+                candidates
+                    .min_by(|a, b| a.0.total_cmp(&b.0))
+                    .map(|(_, k)| k)
+            };
+            let nearby = closest(
+                &mut near
+                    .iter()
+                    .copied()
+                    .filter(|&(_, k)| self.rigid_for[k as usize].contains(&j)),
+            );
+            v[slot] = nearby.or_else(|| {
+                closest(
+                    &mut self.rigid[j as usize]
+                        .iter()
+                        .map(|&k| (self.vertices[k as usize].distance_squared(point), k)),
+                )
+            })?;
+            w[slot] = weight / total;
+        }
+        for slot in joints.len()..ANCHORS {
+            v[slot] = v[0];
         }
         Some((v, w))
     }
@@ -501,7 +792,7 @@ mod tests {
         let (shoulder, elbow) = (joint("upperarm01.L"), joint("lowerarm01.L"));
         let along = |t: f32| shoulder + t * (elbow - shoulder);
         let arm_share = |p: Vec3| {
-            let (v, w) = anchors.of(p, &[]).expect("anchored");
+            let (v, w) = anchors.near(p).expect("anchored");
             assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-5, "{w:?}");
             v.iter()
                 .zip(w)
@@ -520,7 +811,7 @@ mod tests {
         assert_eq!(arm_share(inside), 0.0, "under the arm: the torso's");
         assert!(arm_share(outside) > 0.99, "outside the arm: the arm's");
         let top = joint("head") + Vec3::new(0.0, 0.25, 0.0);
-        let (v, _) = anchors.of(top, &[]).expect("anchored");
+        let (v, _) = anchors.near(top).expect("anchored");
         assert!(
             v.iter().all(|&k| anchors.head[k as usize]),
             "hair: the head's"
