@@ -6,13 +6,16 @@
 //! triangle, as clothed-avatar methods diffuse skinning weights off the body. Which body: cloth
 //! between an arm and the torso below the shoulder (a jacket's sides beside a hanging arm) takes
 //! the torso's alone, so it stays with the torso when the arm swings instead of flapping with it
-//! like a wing (the demo portrait's suit did); hair takes the skull's, the neck's and the
-//! torso's, never the face's (which expressions move) nor the arms'; elsewhere the nearest
-//! vertices, arm or not (a sleeve follows its arm). Depth and skinning weights (over joints) are
-//! then averaged over a window of neighbouring pixels, so neighbours move together: per pixel,
-//! by the body pixel nearest each, long hair tore into cracks along the rows where that jumped
-//! from the jaw to the neck. Each joint is carried by the vertex nearest the Gaussian that moves
-//! with it alone. What lies past the body's reach (a held object) rides the body surface seen
+//! like a wing (the demo portrait's suit did); elsewhere the nearest vertices, arm or not (a
+//! sleeve follows its arm). Hair takes weights over joints diffused from the skull, the neck and
+//! the torso around it (never the face, which expressions move, nor the arms), averaged over a
+//! window of neighbouring hair pixels, each joint carried by the vertex nearest the Gaussian
+//! that moves with it alone; and every Gaussian's depth is averaged over such a window. Per
+//! pixel, by the body pixel nearest each, long hair tore into cracks along the rows where that
+//! jumped from the jaw to the neck. (Cloth keeps its nearest vertices: joints carried by
+//! vertices centimetres apart move a Gaussian a little differently from the joints' own blend,
+//! which is what a glTF export can express, and the clothing beside the arms would be off by
+//! centimetres there.) What lies past the body's reach (a held object) rides the body surface seen
 //! beside it, as one piece: each connected part takes the skinning of its pixel nearest the body.
 //!
 //! Each is a disc facing the source camera, under a pixel wide, and as thick along the view as
@@ -129,40 +132,44 @@ pub fn extras(
             hair,
         });
     }
-    // Depth and skinning, smoothed across what the body does not cover (held objects apart,
-    // they move as one piece below). Each pixel's nearest body pixel jumps, between the jaw's
-    // outline and the neck's say, centimetres apart in depth and with other vertices around it,
-    // and neighbouring pixels placed and skinned by those jumps tore apart into black cracks as
-    // soon as the head turned or nodded. So each pixel's skinning is taken as weights over joints
-    // (hair's diffused from the skull, neck and torso around it; the rest's its anchors'), and
-    // depth and weights are averaged over a window before it is placed.
+    // Depth, smoothed across what the body does not cover (held objects apart: they move as one
+    // piece, below), and hair's skinning too. Each pixel's nearest body pixel jumps, between the
+    // jaw's outline and the neck's say, centimetres apart in depth and with other vertices
+    // around it, and neighbouring pixels placed and skinned by those jumps tore apart into black
+    // cracks as soon as the head turned or nodded. So depth is averaged over a window, and
+    // hair's skinning is taken as weights over joints (diffused from the skull, neck and torso
+    // around it) averaged over the same window before each pixel is placed.
     let unproject =
         |i: usize, z: f32| camera.unproject((i % size) as f32 + 0.5, (i / size) as f32 + 0.5, z);
-    let mut worn = vec![false; size * size];
+    let (mut worn, mut is_hair) = (vec![false; size * size], vec![false; size * size]);
     for u in &found {
         worn[u.pixel] = !u.held;
+        is_hair[u.pixel] = u.hair && !u.held;
     }
     let window = Window::new(&worn, size, SMOOTHING);
-    // `found` is in pixel order, as the window's pixels are.
-    let worn: Vec<&Uncovered> = found.iter().filter(|u| !u.held).collect();
-    let depths: Vec<f32> = worn
+    // `found` is in pixel order, as a window's pixels are.
+    let depths: Vec<f32> = found
         .iter()
+        .filter(|u| !u.held)
         .map(|u| match u.hair {
             true => middle.max(u.depth),
             false => u.depth,
         })
         .collect();
-    let depths = window.means(&depths);
-    let joints: Vec<Vec<(u16, f32)>> = worn
+    let mut depth = vec![0.0; size * size];
+    for (&i, d) in window.pixels.iter().zip(window.means(&depths)) {
+        depth[i] = d;
+    }
+    let window = Window::new(&is_hair, size, SMOOTHING);
+    let weights: Vec<Vec<(u16, f32)>> = window
+        .pixels
         .iter()
-        .zip(&depths)
-        .map(|(u, &z)| match u.hair {
-            true => anchors.hair_joints(unproject(u.pixel, z)),
-            false => anchors.joints_of(u.skinning.0.into_iter().zip(u.skinning.1)),
-        })
+        .map(|&i| anchors.hair_joints(unproject(i, depth[i])))
         .collect();
-    let joints = window.mean_weights(&joints);
-    let mut smoothed = depths.into_iter().zip(joints);
+    let mut joints = vec![Vec::new(); size * size];
+    for (&i, w) in window.pixels.iter().zip(window.mean_weights(&weights)) {
+        joints[i] = w;
+    }
     let mut placed: Vec<(usize, Vec3, Skinning, bool, Extra)> = Vec::new();
     for u in found {
         let Uncovered {
@@ -182,10 +189,13 @@ pub fn extras(
         let (point, skinning, z) = match held {
             true => (unproject(i, z), skinning, z),
             false => {
-                let (depth, joints) = smoothed.next().expect("one per worn pixel");
-                let point = unproject(i, depth);
-                match anchors.by_joints(point, &joints) {
-                    Some(skinning) => (point, skinning, depth),
+                let point = unproject(i, depth[i]);
+                let anchored = match hair {
+                    true => anchors.by_joints(point, &joints[i]),
+                    false => anchors.near(point),
+                };
+                match anchored {
+                    Some(skinning) => (point, skinning, depth[i]),
                     None => continue,
                 }
             }
