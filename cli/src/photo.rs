@@ -455,8 +455,7 @@ impl Eval<'_> {
             let label = format!("{name} frame {i}");
             // A frame's alpha, where it has one (frames written with a person mask), is the mask.
             let has_alpha = frame.pixels.pixels().any(|p| p[3] < u8::MAX);
-            let size = frame.pixels.dimensions();
-            let mut photo = self.pipeline.masked_photo(
+            let photo = self.pipeline.masked_photo(
                 Photo::Pixels {
                     name: &label,
                     pixels: frame.pixels,
@@ -466,15 +465,9 @@ impl Eval<'_> {
                 &mut |_| true,
             )?;
             // Where the frame's square leaves the frame (padding) nothing is compared.
-            let (m, rendered) = guava::eval::evaluate_in_frame(
-                &mut self.renderer,
-                avatar,
-                body,
-                &view,
-                &mut photo,
-                [size.0, size.1],
-            )
-            .with_context(|| label.clone())?;
+            let (m, rendered) =
+                guava::eval::evaluate(&mut self.renderer, avatar, body, Some(&view), &photo)
+                    .with_context(|| label.clone())?;
             let d = match self.lpips.as_mut() {
                 Some(model) => guava::eval::perceptual(model, &rendered, &photo)
                     .with_context(|| label.clone())?,

@@ -12,7 +12,7 @@ pub use metrics::Metrics;
 
 use crate::avatar::Avatar;
 use crate::body::{Posable, PosedBody};
-use crate::photo::{Crop, SourceImage};
+use crate::photo::SourceImage;
 use crate::render::{AvatarRenderError, GpuAvatar, HeadlessRenderer, SplatImage};
 use crate::tracking::SourceView;
 
@@ -81,18 +81,6 @@ pub fn compare(rendered: &SplatImage, photo: &SourceImage) -> Result<Metrics, Ev
     ))
 }
 
-/// Per pixel of a `size`² square that `crop` cuts from a `width × height` video frame: whether it
-/// lies outside the frame (where the square is padding).
-fn outside_frame(crop: Crop, width: u32, height: u32, size: u32) -> Vec<bool> {
-    let scale = crop.side as f32 / size as f32;
-    let inside = |k: u32, start: i32, end: u32| {
-        (0.0..end as f32).contains(&(start as f32 + (k as f32 + 0.5) * scale))
-    };
-    (0..size * size)
-        .map(|i| !(inside(i % size, crop.left, width) && inside(i / size, crop.top, height)))
-        .collect()
-}
-
 /// LPIPS between `rendered` and `photo` (as [`compare`] takes them) over the person's box.
 pub fn perceptual(
     model: &mut lpips::Lpips,
@@ -138,7 +126,11 @@ pub fn side_by_side(photo: &SourceImage, rendered: &SplatImage) -> image::RgbIma
 }
 
 /// Renders `avatar` from its own source view (or `view` when given), at the photo's size, and
-/// compares it with `photo`.
+/// compares it with `photo` where it shows the photo. A padded square's padding (a landscape video
+/// frame's, a photo framed past its edge) holds no pixels: the render is cleared there as the
+/// photo is, so the padding is in neither silhouette nor the person's box (it counted against the
+/// IoU as background, and in the box as near-black matches), and what is compared next (LPIPS,
+/// the side-by-side) sees the same.
 pub fn evaluate(
     renderer: &mut HeadlessRenderer,
     avatar: &Avatar,
@@ -146,49 +138,6 @@ pub fn evaluate(
     view: Option<&SourceView>,
     photo: &SourceImage,
 ) -> Result<(Metrics, SplatImage), EvalError> {
-    let (_, rendered) = render_at(renderer, avatar, body, view, photo.size)?;
-    Ok((compare(&rendered, photo)?, rendered))
-}
-
-/// [`evaluate`] of a `photo` cut by `view`'s crop from a `[width, height]` video frame. Where
-/// the square leaves the frame (padding) the photo holds no pixels: the render and `photo` are
-/// both cleared there, so the padding is in neither silhouette nor the person's box (it counted
-/// against the IoU as background, and in the box as near-black matches), and what is compared
-/// next with them (LPIPS, the side-by-side) sees the same.
-pub fn evaluate_in_frame(
-    renderer: &mut HeadlessRenderer,
-    avatar: &Avatar,
-    body: &impl Posable,
-    view: &SourceView,
-    photo: &mut SourceImage,
-    [width, height]: [u32; 2],
-) -> Result<(Metrics, SplatImage), EvalError> {
-    let (view, mut rendered) = render_at(renderer, avatar, body, Some(view), photo.size)?;
-    let crop = view.crop.unwrap_or(Crop::centred(width, height));
-    let outside = outside_frame(crop, width, height, photo.size);
-    let n = outside.len();
-    for i in (0..n).filter(|&i| outside[i]) {
-        rendered.alpha[i] = 0.0;
-        rendered.inv_depth[i] = 0.0;
-        for c in 0..rendered.channels {
-            rendered.features[c * n + i] = 0.0;
-        }
-        photo.rgb[3 * i..3 * i + 3].fill(0.0);
-        if let Some(mask) = photo.mask.as_mut() {
-            mask[i] = 0.0;
-        }
-    }
-    Ok((compare(&rendered, photo)?, rendered))
-}
-
-/// `avatar` rendered from its own source view (or `view` when given) at `size`², and the view.
-fn render_at(
-    renderer: &mut HeadlessRenderer,
-    avatar: &Avatar,
-    body: &impl Posable,
-    view: Option<&SourceView>,
-    size: u32,
-) -> Result<(SourceView, SplatImage), EvalError> {
     let mut view = view
         .or(avatar.source_view.as_ref())
         .ok_or(EvalError::NoSourceView)?
@@ -196,29 +145,15 @@ fn render_at(
     // GUAVA mode's camera is at its networks' image size; the photo is compared at its own.
     view.camera = view
         .camera
-        .scaled(size as f32 / view.camera.width.max(1) as f32);
-    let rendered = render_view(renderer, avatar, body, &view)?;
-    Ok((view, rendered))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A 640×360 frame squared with padding (side 640, 140 px above and below) and seen at 512²:
-    /// the rows whose centres fall above the frame's top or below its bottom are outside, every
-    /// column is inside.
-    #[test]
-    fn the_padding_of_a_squared_frame_is_outside_it() {
-        let outside = outside_frame(Crop::padded(640, 360), 640, 360, 512);
-        let row_outside = |y: usize| outside[y * 512..(y + 1) * 512].iter().all(|&o| o);
-        let row_inside = |y: usize| outside[y * 512..(y + 1) * 512].iter().all(|&o| !o);
-        // Row y's centre is at −140 + (y + 0.5)·1.25 frame pixels.
-        assert!((0..112).all(row_outside));
-        assert!((112..400).all(row_inside));
-        assert!((400..512).all(row_outside));
-        // A crop inside the frame leaves nothing out.
-        let centred = outside_frame(Crop::centred(640, 360), 640, 360, 512);
-        assert!(centred.iter().all(|&o| !o));
+        .scaled(photo.size as f32 / view.camera.width.max(1) as f32);
+    let mut rendered = render_view(renderer, avatar, body, &view)?;
+    let (size, n) = (photo.size as usize, rendered.alpha.len());
+    for i in (0..n).filter(|&i| !photo.shown.contains((i % size) as i64, (i / size) as i64)) {
+        rendered.alpha[i] = 0.0;
+        rendered.inv_depth[i] = 0.0;
+        for c in 0..rendered.channels {
+            rendered.features[c * n + i] = 0.0;
+        }
     }
+    Ok((compare(&rendered, photo)?, rendered))
 }

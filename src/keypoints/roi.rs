@@ -317,6 +317,7 @@ fn shrink(source: &SourceImage, factor: usize) -> SourceImage {
         size: small as u32,
         rgb,
         mask: None,
+        shown: crate::photo::Shown::all(small as u32),
     }
 }
 

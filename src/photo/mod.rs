@@ -81,6 +81,36 @@ impl Crop {
     }
 }
 
+/// The pixels of a square that show the photo: a square reaching past the photo's edges (a
+/// video's tracked square, taller than a landscape frame) is padded there, and the padding is
+/// neither the person nor the background: what lies there is unknown, as past the square's own
+/// border. Pixel `(x, y)` is shown when `left ≤ x < right` and `top ≤ y < bottom`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shown {
+    pub left: i64,
+    pub top: i64,
+    pub right: i64,
+    pub bottom: i64,
+}
+
+impl Shown {
+    /// A whole `size`² square.
+    pub fn all(size: u32) -> Self {
+        let size = i64::from(size);
+        Self {
+            left: 0,
+            top: 0,
+            right: size,
+            bottom: size,
+        }
+    }
+
+    /// Whether pixel `(x, y)` shows the photo.
+    pub fn contains(&self, x: i64, y: i64) -> bool {
+        (self.left..self.right).contains(&x) && (self.top..self.bottom).contains(&y)
+    }
+}
+
 /// Interleaved RGB planes plus the person mask, `size`² pixels, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SourceImage {
@@ -89,6 +119,8 @@ pub struct SourceImage {
     pub rgb: Vec<f32>,
     /// Person mask in [0, 1]; `None` until known (no alpha channel and no mask given yet).
     pub mask: Option<Vec<f32>>,
+    /// The pixels that show the photo (the rest is padding: no person, and no background).
+    pub shown: Shown,
 }
 
 impl SourceImage {
@@ -185,15 +217,34 @@ impl SourceImage {
                         .into(),
             });
         }
+        // The photo's own pixels in the square, at `size`² (a pixel counts when its centre
+        // does).
+        let scale = f64::from(size) / f64::from(side);
+        let at = |v: i64| ((v as f64) * scale).round() as i64;
+        let shown = Shown {
+            left: at(-i64::from(left)).max(0),
+            top: at(-i64::from(top)).max(0),
+            right: at(i64::from(w) - i64::from(left)).min(i64::from(size)),
+            bottom: at(i64::from(h) - i64::from(top)).min(i64::from(size)),
+        };
         Ok(Self {
             size,
             rgb,
             mask: use_alpha.then_some(mask),
+            shown,
         })
     }
 
-    /// Sets the mask when the image had none (the posed body's silhouette) and applies it.
-    pub fn apply_mask(&mut self, mask: Vec<f32>) {
+    /// Sets the mask when the image had none (the posed body's silhouette, a segmentation) and
+    /// applies it; the padding is no person, whatever the mask says (a segmentation joins a
+    /// black padding to a black top).
+    pub fn apply_mask(&mut self, mut mask: Vec<f32>) {
+        let size = self.size as usize;
+        for (i, m) in mask.iter_mut().enumerate() {
+            if !self.shown.contains((i % size) as i64, (i / size) as i64) {
+                *m = 0.0;
+            }
+        }
         for (px, &m) in self.rgb.chunks_exact_mut(3).zip(&mask) {
             px.iter_mut().for_each(|c| *c *= m);
         }
@@ -306,4 +357,37 @@ pub fn keep_person(mask: &mut [f32], size: usize) -> usize {
         }
     }
     cleared
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 640×360 frame's tracked square reaches 40 pixels above it and past its bottom and right
+    /// edge (the shipped clip's, `[221, -40, 439]`): at 512² the frame's rows are 47 to 466 and
+    /// its columns 0 to 488, and a mask that claims the padding is cleared there.
+    #[test]
+    fn a_padded_squares_padding_shows_nothing() {
+        let frame = RgbaImage::from_pixel(640, 360, image::Rgba([200, 150, 100, 255]));
+        let crop = Crop {
+            left: 221,
+            top: -40,
+            side: 439,
+        };
+        let mut photo = SourceImage::from_rgba_at(&frame, Some(crop), false, "frame", SOURCE_SIZE)
+            .expect("square");
+        let expected = Shown {
+            left: 0,
+            top: 47,
+            right: 489,
+            bottom: 467,
+        };
+        assert_eq!(photo.shown, expected);
+        photo.apply_mask(vec![1.0; 512 * 512]);
+        let mask = photo.mask.as_ref().expect("a mask");
+        for (y, expected) in [(46, 0.0), (47, 1.0), (466, 1.0), (467, 0.0)] {
+            assert_eq!(mask[y * 512 + 100], expected, "row {y}");
+        }
+        assert_eq!(photo.pixel(511 * 512).0, [0.0; 3], "the padding is black");
+    }
 }

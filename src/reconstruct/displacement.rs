@@ -17,6 +17,7 @@ use glam::Vec3;
 
 use crate::body::{BodyModel, PosedBody};
 use crate::camera::Camera;
+use crate::photo::Shown;
 use crate::photo::distance::nearest_seeds;
 use crate::raster::rasterize;
 
@@ -53,19 +54,21 @@ pub struct DisplacementReport {
 }
 
 /// Offsets (metres along the posed normal, one per vertex of `body`) that fit the silhouette of
-/// `posed` seen by `camera` to `mask` (`camera.width`², values ≥ ½ the person).
+/// `posed` seen by `camera` to `mask` (`camera.width`², values ≥ ½ the person) where it `shown`
+/// the photo.
 pub fn fit_displacements(
     body: &BodyModel,
     posed: &PosedBody,
     camera: &Camera,
     mask: &[f32],
+    shown: Shown,
 ) -> (Vec<f32>, DisplacementReport) {
     let size = camera.width as usize;
     let groups = body.weld.iter().max().map_or(0, |&m| m as usize + 1);
     let neighbours = group_neighbours(body, groups);
     let inside = |v: usize| {
         let p = camera.project(posed.vertices[v]);
-        p.z > 0.0 && (0.0..size as f32).contains(&p.x) && (0.0..size as f32).contains(&p.y)
+        p.z > 0.0 && shown.contains(p.x.floor() as i64, p.y.floor() as i64)
     };
     let prior = group_priors(body, groups, &neighbours, inside);
     let signed = signed_distance(mask, size);
@@ -93,8 +96,7 @@ pub fn fit_displacements(
                 // The photo's edge is no outline: the body goes on past it.
                 let outside = |dx: i64, dy: i64| {
                     let (u, v) = (x as i64 + dx, y as i64 + dy);
-                    let inside = u >= 0 && v >= 0 && u < size as i64 && v < size as i64;
-                    inside && f.triangle[v as usize * size + u as usize] < 0
+                    shown.contains(u, v) && f.triangle[v as usize * size + u as usize] < 0
                 };
                 let edge = [(-1, 0), (1, 0), (0, -1), (0, 1)]
                     .into_iter()

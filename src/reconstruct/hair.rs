@@ -17,6 +17,7 @@ use super::hands::FACE_BELOW;
 use crate::avatar::{SkinnedGaussians, quat_from_matrix};
 use crate::body::{BodyModel, PosedBody};
 use crate::camera::Camera;
+use crate::photo::Shown;
 use crate::raster::Fragments;
 
 /// The most hair is taken to stand off the skull (metres); more around the head is a raised
@@ -39,11 +40,17 @@ const BEHIND: f32 = 0.01;
 const SKULL_BELOW: f32 = 0.02;
 
 /// How far hair stands off the head of `posed` seen by `camera` on `mask` (`camera.width`²,
-/// row-major), in metres, at most [`MAX_HAIR`]: the median run of person pixels past the
+/// row-major; the photo where it is `shown`), in metres, at most [`MAX_HAIR`]: the median run of person pixels past the
 /// head's outline above the crown and beside the head above the hairline, over a few columns
 /// each, where the photo shows them whole (a run cut by the photo's edge says nothing); 0
 /// without any.
-pub fn thickness(body: &BodyModel, posed: &PosedBody, camera: &Camera, mask: &[f32]) -> f32 {
+pub fn thickness(
+    body: &BodyModel,
+    posed: &PosedBody,
+    camera: &Camera,
+    mask: &[f32],
+    shown: Shown,
+) -> f32 {
     let Some(j) = body.joint_index("head") else {
         return 0.0;
     };
@@ -61,8 +68,9 @@ pub fn thickness(body: &BodyModel, posed: &PosedBody, camera: &Camera, mask: &[f
     let size = camera.width as i32;
     let person = |p: Vec2| {
         let p = p.floor().as_ivec2();
-        let inside = p.x >= 0 && p.y >= 0 && p.x < size && p.y < size;
-        inside.then(|| mask[(p.y * size + p.x) as usize] >= PERSON)
+        shown
+            .contains(p.x.into(), p.y.into())
+            .then(|| mask[(p.y * size + p.x) as usize] >= PERSON)
     };
     // Person pixels from `start` along `dir`, up to the most hair; `None` where the photo's edge
     // cuts the run or `start` is off the photo.

@@ -26,7 +26,7 @@ use std::time::Duration;
 
 use crate::avatar::Avatar;
 use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, TargetGroup};
-use crate::photo::{PhotoError, SourceImage};
+use crate::photo::{PhotoError, Shown, SourceImage};
 use crate::progress::{Cancelled, Stage, StageClock};
 use crate::raster;
 use crate::tracking::{SourceView, TrackingError};
@@ -127,7 +127,8 @@ pub fn reconstruct_default(
     clock.start(Stage::Dress, progress)?;
     let mut displacements = Vec::new();
     if let Some(mask) = &photo.mask {
-        let (offsets, dressed) = displacement::fit_displacements(body, &posed, camera, mask);
+        let (offsets, dressed) =
+            displacement::fit_displacements(body, &posed, camera, mask, photo.shown);
         let vertices = crate::avatar::Dressing::default()
             .apply(&offsets, &posed.vertices, &body.triangles, Some(&body.weld))
             .to_vec();
@@ -198,10 +199,17 @@ pub fn reconstruct_default(
     avatar.displacements = displacements;
 
     clock.start(Stage::Extras, progress)?;
-    avatar.skinned = extras::extras(&photo, &fragments, body, &posed.vertices, &posed, camera);
+    avatar.skinned = extras::extras(
+        &past_edge::continued_below(&photo),
+        &fragments,
+        body,
+        &posed.vertices,
+        &posed,
+        camera,
+    );
     // Hair's volume behind the head, in the crown's colour (the back of the head's).
     if let (Some(mask), Some(crown)) = (&photo.mask, crown) {
-        report.hair = hair::thickness(body, &posed, camera, mask);
+        report.hair = hair::thickness(body, &posed, camera, mask, photo.shown);
         report.hair_shell = hair::shell(
             &mut avatar.skinned,
             body,
@@ -213,7 +221,13 @@ pub fn reconstruct_default(
         );
     }
     report.extras = avatar.skinned.len();
-    report.left_out = leave_out(&mut avatar, &posed.vertices, &body.triangles, camera);
+    report.left_out = leave_out(
+        &mut avatar,
+        &posed.vertices,
+        &body.triangles,
+        camera,
+        photo.shown,
+    );
     report.timings = clock.finish();
     Ok((avatar, report))
 }
@@ -235,14 +249,21 @@ fn leave_out(
     vertices: &[glam::Vec3],
     triangles: &[[u32; 3]],
     camera: &crate::camera::Camera,
+    shown: Shown,
 ) -> usize {
-    let (w, h) = (camera.width as f32, camera.height as f32);
-    let (mx, my) = (LEAVE_OUT_MARGIN * w, LEAVE_OUT_MARGIN * h);
+    let [left, top, right, bottom] =
+        [shown.left, shown.top, shown.right, shown.bottom].map(|v| v as f32);
+    let (mx, my) = (
+        LEAVE_OUT_MARGIN * camera.width as f32,
+        LEAVE_OUT_MARGIN * camera.height as f32,
+    );
     let seen: Vec<bool> = vertices
         .iter()
         .map(|&v| {
             let p = camera.project(v);
-            p.z > 0.0 && (-mx..w + mx).contains(&p.x) && (-my..h + my).contains(&p.y)
+            p.z > 0.0
+                && (left - mx..right + mx).contains(&p.x)
+                && (top - my..bottom + my).contains(&p.y)
         })
         .collect();
     let outside: Vec<bool> = avatar

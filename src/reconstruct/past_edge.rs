@@ -70,6 +70,12 @@ pub fn past_edge(
         return out;
     }
     let side = photo.size as i32;
+    // The photo's own edges in its square (a padded square's padding shows nothing).
+    let (left, right, bottom) = (
+        photo.shown.left as i32,
+        photo.shown.right as i32,
+        photo.shown.bottom as i32,
+    );
     let excluded = head_or_hand(body);
     let mut edges: HashMap<i32, Option<[f32; 3]>> = HashMap::new();
     for &t in &uv.texels {
@@ -81,16 +87,16 @@ pub fn past_edge(
             continue;
         }
         let q = camera.project(uv.point(i, vertices, &body.triangles));
-        if !q.is_finite() || q.z <= 0.0 || q.y < side as f32 {
+        if !q.is_finite() || q.z <= 0.0 || q.y < bottom as f32 || right <= left {
             continue;
         }
-        let x = (q.x.floor() as i32).clamp(0, side - 1);
+        let x = (q.x.floor() as i32).clamp(left, right - 1);
         out[i] = *edges.entry(x / CELL).or_insert_with(|| {
             let centre = x / CELL * CELL + CELL / 2;
             WINDOW_RADII.iter().find_map(|&r| {
                 let mut colours = Vec::new();
-                for y in side - 1 - r..side {
-                    for x in (centre - r).max(0)..=(centre + r).min(side - 1) {
+                for y in (bottom - 1 - r).max(0)..bottom {
+                    for x in (centre - r).max(left)..=(centre + r).min(right - 1) {
                         let k = (y * side + x) as usize;
                         let on_head_or_hand = usize::try_from(fragments.triangle[k])
                             .is_ok_and(|t| excluded[body.triangles[t][0] as usize]);
@@ -104,6 +110,30 @@ pub fn past_edge(
                 median(colours)
             })
         });
+    }
+    out
+}
+
+/// `photo` with the person at its bottom edge continued straight down through the padding below
+/// it (a padded square's), for the Gaussians beyond the body: the hair and clothing a frame cuts
+/// go on past the cut, as the body does. Without them, a person rising in a video showed the
+/// background where her hair had gone on below the reference frame's edge.
+pub fn continued_below(photo: &SourceImage) -> SourceImage {
+    let mut out = photo.clone();
+    let (size, shown) = (photo.size as i64, photo.shown);
+    let Some(mask) = out.mask.as_mut() else {
+        return out;
+    };
+    if shown.bottom <= shown.top || shown.bottom >= size {
+        return out;
+    }
+    for x in shown.left.max(0)..shown.right.min(size) {
+        let edge = ((shown.bottom - 1) * size + x) as usize;
+        for y in shown.bottom..size {
+            let i = (y * size + x) as usize;
+            mask[i] = mask[edge];
+            out.rgb.copy_within(3 * edge..3 * edge + 3, 3 * i);
+        }
     }
     out
 }
