@@ -7,7 +7,7 @@ use guava::body::{BodyModel, BodyPose, PosedBody};
 use guava::camera::{Camera, GUAVA_INVTANFOV};
 use guava::eval::subjects::{VIEWS, reconstruct_subject_as, score};
 use guava::fit::{FitReport, fit_silhouette};
-use guava::photo::{Crop, SOURCE_SIZE, Shown, SourceImage};
+use guava::photo::{Crop, SOURCE_SIZE, SourceImage};
 use guava::pipeline::{Mode, Photo, Pipeline, Tracked};
 use guava::raster::rasterize;
 use guava::reconstruct::{DEFAULT_UV_SIZE, UvMap, reconstruct_default};
@@ -119,8 +119,7 @@ fn the_silhouette_stage_recovers_a_known_shape_and_pose() {
         camera: start_camera,
         crop: None,
     };
-    let (fitted, silhouette) =
-        fit_silhouette(&body, &start, &report, &mask, side, Shown::all(side));
+    let (fitted, silhouette) = fit_silhouette(&body, &start, &report, &mask, side);
 
     let vertex_px = |view: &SourceView| {
         let mut p = PosedBody::default();

@@ -17,7 +17,6 @@ use super::problem::{FitState, Stage, Target, Unknown, camera_for};
 use super::unknowns::{joint_unknowns, root_and_camera};
 use super::{FitReport, ITERATIONS, SHAPE_PRIOR_PX};
 use crate::body::{BodyModel, BodyPose, Landmark, PointPoser, PosedBody, TargetGroup};
-use crate::photo::Shown;
 use crate::photo::distance::nearest_seeds;
 use crate::raster::rasterize;
 use crate::tracking::SourceView;
@@ -54,19 +53,17 @@ struct Coverage {
 }
 
 /// Fits `view` (the keypoint stages' answer on `body`, with `report` holding what they
-/// observed) to `mask` (`side`², values ≥ ½ the person; the photo where it is `shown`). The
-/// camera keeps GUAVA's intrinsics.
+/// observed) to `mask` (`side`², values ≥ ½ the person). The camera keeps GUAVA's intrinsics.
 pub fn fit_silhouette(
     body: &BodyModel,
     view: &SourceView,
     report: &FitReport,
     mask: &[f32],
     side: u32,
-    shown: Shown,
 ) -> (SourceView, SilhouetteReport) {
     let size = side as usize;
     let person: Vec<bool> = mask.iter().map(|&m| m >= 0.5).collect();
-    let mask_edge = outline(&person, size, shown);
+    let mask_edge = outline(&person, size);
     let to_mask_edge = nearest_seeds(&mask_edge, size);
     let mut state = FitState::of_view(view);
     let mut unknowns: Vec<(Unknown, f64)> = root_and_camera().collect();
@@ -129,7 +126,7 @@ pub fn fit_silhouette(
         let Some(Coverage { covered, surface }) = measure(&state.pose, state.camera) else {
             break;
         };
-        let body_edge = outline(&covered, size, shown);
+        let body_edge = outline(&covered, size);
         let to_body_edge = nearest_seeds(&body_edge, size);
         let mut matches: Vec<(Landmark, Vec2)> = Vec::new();
         let mut distance = 0.0;
@@ -212,9 +209,9 @@ pub fn fit_silhouette(
     )
 }
 
-/// The pixels of `inside` with a 4-neighbour outside it, among those the photo shows (the photo's
-/// edge is no outline, nor a padded square's padding).
-fn outline(inside: &[bool], size: usize, shown: Shown) -> Vec<bool> {
+/// The pixels of `inside` with a 4-neighbour outside it, within the image (the photo's edge is no
+/// outline).
+fn outline(inside: &[bool], size: usize) -> Vec<bool> {
     (0..size * size)
         .map(|i| {
             let (x, y) = (i % size, i / size);
@@ -227,7 +224,7 @@ fn outline(inside: &[bool], size: usize, shown: Shown) -> Vec<bool> {
                 ]
                 .into_iter()
                 .flatten()
-                .any(|j| !inside[j] && shown.contains((j % size) as i64, (j / size) as i64))
+                .any(|j| !inside[j])
         })
         .collect()
 }

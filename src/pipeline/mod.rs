@@ -294,7 +294,7 @@ impl Pipeline {
                 if let (BodyRef::Template(b), Some(mask)) = (body, mask) {
                     clock.start(Stage::Silhouette, progress)?;
                     let (fitted, silhouette) =
-                        fit_silhouette(b, &view, &fit, &mask, read.image.size, read.image.shown);
+                        fit_silhouette(b, &view, &fit, &mask, read.image.size);
                     view = fitted;
                     report.silhouette = Some(silhouette);
                 }
