@@ -32,8 +32,11 @@ const BENDING: f64 = 2.0;
 const SMOOTHING: f64 = 0.2;
 /// How strongly offsets stay at zero where nothing asks for them (per vertex).
 const MAGNITUDE_PRIOR: f64 = 0.002;
-/// Where clothing never is (face, hands, eyes, mouth): offsets held at zero.
+/// Where clothing never is (face, ears, hands, eyes, mouth): offsets held at zero.
 const BARE_PRIOR: f64 = 100.0;
+/// The ears: head vertices this close to an ear landmark (metres, rest pose). Dressed out to
+/// the hair beside them, their folds stretched into streaks that glowed beside the temples.
+const EAR_RADIUS: f32 = 0.035;
 /// Silhouette rounds (each re-rasterizes the displaced body).
 const ROUNDS: usize = 3;
 /// Conjugate-gradient steps per round at most; each round starts from the last one's offsets,
@@ -173,8 +176,8 @@ fn group_neighbours(body: &BodyModel, groups: usize) -> Vec<Vec<u32>> {
     out
 }
 
-/// Each group's magnitude prior: [`BARE_PRIOR`] where any of its vertices is face, hand, eye or
-/// mouth, or lies outside the photo (`seen` is false: nothing there says what it wears), halving
+/// Each group's magnitude prior: [`BARE_PRIOR`] where any of its vertices is face, ear, hand, eye
+/// or mouth, or lies outside the photo (`seen` is false: nothing there says what it wears), halving
 /// with every edge away from them (so clothing tapers to a cuff or a collar over a few rings
 /// instead of standing as a cliff), and never below [`MAGNITUDE_PRIOR`].
 fn group_priors(
@@ -184,6 +187,14 @@ fn group_priors(
     seen: impl Fn(usize) -> bool,
 ) -> Vec<f64> {
     let head = body.joint_index("head").map(|j| body.joints[j].rest);
+    let rest = body.landmark_positions(&body.vertices);
+    let ears: Vec<Vec3> = body
+        .landmarks
+        .iter()
+        .zip(&rest)
+        .filter(|(l, _)| l.name.ends_with("_ear"))
+        .map(|(_, &p)| p)
+        .collect();
     let mut prior = vec![MAGNITUDE_PRIOR; groups];
     let mut ring = Vec::new();
     for (v, &g) in body.weld.iter().enumerate() {
@@ -191,7 +202,11 @@ fn group_priors(
             || match body.part_of(v) {
                 Some("body") | Some("foot.L") | Some("foot.R") | None => false,
                 // The face: the head's front below the hairline; the scalp may wear hair.
-                Some("head") => head.is_some_and(|h| super::hands::on_face(h, body.vertices[v])),
+                Some("head") => {
+                    let p = body.vertices[v];
+                    head.is_some_and(|h| super::hands::on_face(h, p))
+                        || ears.iter().any(|e| e.distance(p) < EAR_RADIUS)
+                }
                 Some(_) => true,
             };
         if bare && prior[g as usize] < BARE_PRIOR {
