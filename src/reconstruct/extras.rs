@@ -20,8 +20,8 @@
 //!
 //! Each is a disc facing the source camera, under a pixel wide, and as thick along the view as
 //! half its distance from that surface, up to [`MAX_DEPTH`] (thicker, a jacket's edge around the
-//! neck stood out as a collar from the side). Hair (what the head skins) is placed at the head's
-//! middle depth instead and stands only [`HAIR_DEPTH`] deep along the view: at the nearest
+//! neck stood out as a collar from the side). Hair (what lies near the head) is placed at the
+//! head's middle depth instead and stands only [`HAIR_DEPTH`] deep along the view: at the nearest
 //! surface's depth, the hair above and beside the face was a flat brim in front of the forehead
 //! seen from the side, and deeper discs drew horizontal streaks; from the front it looks the same
 //! either way.
@@ -62,6 +62,10 @@ const EXPRESSION_MOVES: f32 = 1e-4;
 /// A vertex stands for a joint when its weight for the joint is at least this share of the
 /// largest any vertex has.
 const RIGID: f32 = 0.9;
+/// What has a head vertex this near (metres) is hair. Taken from the anchors alone (the head
+/// among the four nearest), the hair hanging beside the clip's neck was cloth, skinned by the
+/// torso, and stayed behind when her head moved.
+const HAIR_REACH: f32 = 2.0 * REACH;
 /// Cloth this far below the shoulder joint and between the arm and the torso follows the torso.
 const BELOW_SHOULDER: f32 = 0.05;
 
@@ -122,7 +126,10 @@ pub fn extras(
                 None => continue,
             },
         };
-        let hair = skinning.0.iter().any(|&k| anchors.head[k as usize]);
+        let hair = anchors
+            .within(point, HAIR_REACH)
+            .iter()
+            .any(|&(_, k)| anchors.head[k as usize]);
         found.push(Uncovered {
             pixel: i,
             nearest: q,
@@ -340,7 +347,7 @@ type Skinning = ([u32; 4], [f32; 4]);
 
 /// A person pixel the body leaves uncovered: the body pixel nearest it and the depth there,
 /// what skins it there, whether it rides the surface beside it (a held object, past the body's
-/// reach) and whether it is hair (the head among what skins it).
+/// reach) and whether it is hair (the head within [`HAIR_REACH`]).
 struct Uncovered {
     pixel: usize,
     nearest: usize,
