@@ -225,31 +225,14 @@ fn the_torso_below_a_close_ups_edge_wears_the_clothing_at_the_edge() {
     let camera = view.camera;
     let outcome = reconstruct_subject_as(&mut Pipeline::default(), &subject, subject_texture, view)
         .expect("reconstructs");
-    let avatar = &outcome.avatar;
-    let uv = &avatar.uv;
-    let c = avatar.channels;
-    // Per clothed Gaussian below the photo's bottom edge: how far its colour is from the jacket
-    // truly there and from the skin the body would have there.
-    let (mut to_cloth, mut closer) = (Vec::new(), 0);
-    for i in 0..uv.triangles.len() - avatar.outside {
-        let tri = body.triangles[uv.triangles[i] as usize];
-        let b = uv.barycentrics[i];
-        let k = (0..3).fold(0, |m, k| if b[k] > b[m] { k } else { m });
-        let v = tri[k] as usize;
-        if subject.clothing[v] <= 0.0 || body.part_of(v).is_some_and(|p| p.starts_with("hand.")) {
-            continue;
-        }
-        let rest: Vec3 = (0..3).map(|k| b[k] * body.vertices[tri[k] as usize]).sum();
-        let q = camera.project(rest);
-        if q.y < SOURCE_SIZE as f32 || !(0.0..SOURCE_SIZE as f32).contains(&q.x) {
-            continue;
-        }
-        let colour = Vec3::from_slice(&uv.local.features[i * c..i * c + 3]);
-        let cloth = (colour - Vec3::from(subject_texture(rest, Material::Cloth))).abs();
-        let skin = (colour - Vec3::from(subject_texture(rest, Material::Skin))).abs();
-        to_cloth.push(cloth.element_sum() / 3.0);
-        closer += usize::from(cloth.element_sum() < skin.element_sum());
-    }
+    let colours = clothed_colours(
+        &outcome.avatar,
+        &subject,
+        &camera,
+        SOURCE_SIZE as f32..f32::MAX,
+    );
+    let to_cloth: Vec<f32> = colours.iter().map(|&(cloth, _)| cloth).collect();
+    let closer = colours.iter().filter(|(cloth, skin)| cloth < skin).count();
     let n = to_cloth.len();
     assert!(n > 2000, "{n} clothed Gaussians below the edge");
     let mean = to_cloth.iter().sum::<f32>() / n as f32;
@@ -435,11 +418,30 @@ fn a_padded_squares_padding_is_not_taken_for_the_person() {
     let uv = UvMap::for_body(&body, DEFAULT_UV_SIZE);
     let (avatar, _) =
         reconstruct_default(&body, &uv, &view, photo, "frame", &mut |_| true).expect("avatar");
-    let (uvg, c) = (&avatar.uv, avatar.channels);
-    let mut to_cloth = Vec::new();
-    for i in 0..uvg.triangles.len() - avatar.outside {
-        let tri = body.triangles[uvg.triangles[i] as usize];
-        let b = uvg.barycentrics[i];
+    // The body in the padding, short of the square's bottom (where its edge blurs the torso).
+    let colours = clothed_colours(&avatar, &subject, &camera, cut as f32 + 8.0..490.0);
+    let to_cloth: Vec<f32> = colours.iter().map(|&(cloth, _)| cloth).collect();
+    let n = to_cloth.len();
+    let mean = to_cloth.iter().sum::<f32>() / n as f32;
+    println!("{n} clothed Gaussians in the padding: {mean:.3} from the jacket on average");
+    assert!(n > 2000, "{n} clothed Gaussians in the padding");
+    assert!(mean < 0.2, "{mean} from the jacket");
+}
+
+/// Per clothed UV Gaussian of `avatar` (not a hand's) whose rest point `camera` places at a row
+/// in `rows` and inside the photo's width: how far its colour is from the jacket truly there and
+/// from the skin the body would have there (mean absolute difference per channel).
+fn clothed_colours(
+    avatar: &guava::avatar::Avatar,
+    subject: &Subject,
+    camera: &Camera,
+    rows: std::ops::Range<f32>,
+) -> Vec<(f32, f32)> {
+    let (body, uv, c) = (subject.body, &avatar.uv, avatar.channels);
+    let mut out = Vec::new();
+    for i in 0..uv.triangles.len() - avatar.outside {
+        let tri = body.triangles[uv.triangles[i] as usize];
+        let b = uv.barycentrics[i];
         let k = (0..3).fold(0, |m, k| if b[k] > b[m] { k } else { m });
         let v = tri[k] as usize;
         if subject.clothing[v] <= 0.0 || body.part_of(v).is_some_and(|p| p.starts_with("hand.")) {
@@ -447,16 +449,17 @@ fn a_padded_squares_padding_is_not_taken_for_the_person() {
         }
         let rest: Vec3 = (0..3).map(|k| b[k] * body.vertices[tri[k] as usize]).sum();
         let q = camera.project(rest);
-        if q.y < cut as f32 + 8.0 || !(0.0..SOURCE_SIZE as f32).contains(&q.x) || q.y >= 490.0 {
+        if !rows.contains(&q.y) || !(0.0..SOURCE_SIZE as f32).contains(&q.x) {
             continue;
         }
-        let colour = Vec3::from_slice(&uvg.local.features[i * c..i * c + 3]);
-        let cloth = (colour - Vec3::from(subject_texture(rest, Material::Cloth))).abs();
-        to_cloth.push(cloth.element_sum() / 3.0);
+        let colour = Vec3::from_slice(&uv.local.features[i * c..i * c + 3]);
+        let off = |m: Material| {
+            (colour - Vec3::from(subject_texture(rest, m)))
+                .abs()
+                .element_sum()
+                / 3.0
+        };
+        out.push((off(Material::Cloth), off(Material::Skin)));
     }
-    let n = to_cloth.len();
-    let mean = to_cloth.iter().sum::<f32>() / n as f32;
-    println!("{n} clothed Gaussians in the padding: {mean:.3} from the jacket on average");
-    assert!(n > 2000, "{n} clothed Gaussians in the padding");
-    assert!(mean < 0.2, "{mean} from the jacket");
+    out
 }
