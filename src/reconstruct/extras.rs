@@ -179,25 +179,18 @@ pub fn extras(
     }
     let mut placed: Vec<(usize, Vec3, Skinning, bool, Extra)> = Vec::new();
     for u in found {
-        let Uncovered {
-            pixel: i,
-            nearest: q,
-            depth: z,
-            skinning,
-            held,
-            hair,
-        } = u;
+        let (i, z) = (u.pixel, u.depth);
         let m = mask[i];
         // Half the way to the body beside it, along the view (cloth), or hair's own depth.
-        let along = match hair {
+        let along = match u.hair {
             true => HAIR_DEPTH,
-            false => 0.5 * unproject(i, z).distance(unproject(q, z)),
+            false => 0.5 * unproject(i, z).distance(unproject(u.nearest, z)),
         };
-        let (point, skinning, z) = match held {
-            true => (unproject(i, z), skinning, z),
+        let (point, skinning, z) = match u.held {
+            true => (unproject(i, z), u.skinning, z),
             false => {
                 let point = unproject(i, depth[i]);
-                let anchored = match hair {
+                let anchored = match u.hair {
                     true => anchors.by_joints(point, &joints[i]),
                     false => anchors.near(point),
                 };
@@ -216,7 +209,7 @@ pub fn extras(
             opacity: OPACITY * m.min(1.0),
             features: [features[0], features[1], features[2], m.min(1.0)],
         };
-        placed.push((i, point, skinning, held, gaussian));
+        placed.push((i, point, skinning, u.held, gaussian));
     }
     // A held object moves as one piece: each connected part of what rides the surface beside
     // it takes the skinning of its pixel nearest the body. Pixel by pixel, by the surface seen
