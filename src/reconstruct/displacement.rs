@@ -57,8 +57,8 @@ pub struct DisplacementReport {
 }
 
 /// Offsets (metres along the posed normal, one per vertex of `body`) that fit the silhouette of
-/// `posed` seen by `camera` to `mask` (`camera.width`², values ≥ ½ the person) where it `shown`
-/// the photo.
+/// `posed` seen by `camera` to `mask` (`camera.width`², values ≥ ½ the person) over the pixels
+/// that show the photo (`shown`).
 pub fn fit_displacements(
     body: &BodyModel,
     posed: &PosedBody,

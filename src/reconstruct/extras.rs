@@ -12,11 +12,11 @@
 //! window of neighbouring hair pixels, each joint carried by the vertex nearest the Gaussian
 //! that moves with it alone, and its depth averaged over the same window. Per pixel, by the body
 //! pixel nearest each, long hair tore into cracks along the rows where that jumped from the jaw
-//! to the neck. (Cloth keeps its nearest vertices: joints carried by
-//! vertices centimetres apart move a Gaussian a little differently from the joints' own blend,
-//! which is what a glTF export can express, and the clothing beside the arms would be off by
-//! centimetres there.) What lies past the body's reach (a held object) rides the body surface seen
-//! beside it, as one piece: each connected part takes the skinning of its pixel nearest the body.
+//! to the neck. (Cloth keeps its nearest vertices: joints carried by vertices centimetres apart
+//! move a Gaussian a little differently from the joints' own blend, which is what a glTF export
+//! can express, and the clothing beside the arms would be off by centimetres there.) What lies
+//! past the body's reach (a held object) rides the body surface seen beside it, as one piece:
+//! each connected part takes the skinning of its pixel nearest the body.
 //!
 //! Each is a disc facing the source camera, under a pixel wide, and as thick along the view as
 //! half its distance from that surface, up to [`MAX_DEPTH`] (thicker, a jacket's edge around the
@@ -40,7 +40,7 @@ pub const MAX_DEPTH: f32 = 0.01;
 /// How deep hair stands along the view (standard deviation, metres): three of it reach from the
 /// head's middle to its front and back.
 pub const HAIR_DEPTH: f32 = 0.002;
-/// Half the side of the window the depth and skinning are averaged over (pixels of the source).
+/// Half the side of the window hair's depth and skinning are averaged over (pixels of the source).
 const SMOOTHING: usize = 16;
 /// Standard deviation of a disc across the view, in pixels of the source: a neighbour's disc
 /// drawn over a pixel adds 8 % of its colour there (at 0.6, 24 %, which blurred the hair's
@@ -223,6 +223,13 @@ pub fn extras(
         push(&mut out, point, skinning, disc, &gaussian, vertices, posed);
     }
     out
+}
+
+/// The vertex of the least distance among `(distance, vertex)` pairs.
+fn closest(candidates: impl Iterator<Item = (f32, u32)>) -> Option<u32> {
+    candidates
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, k)| k)
 }
 
 /// The anchors' weight at distance `d` (before normalising).
@@ -575,11 +582,23 @@ impl<'a> Anchors<'a> {
     /// Up to [`ANCHORS`] vertices near `point` and their weights (summing to 1): within
     /// [`REACH`], else three times as far; `None` past that.
     fn near(&self, point: Vec3) -> Option<Skinning> {
-        let mut near = self.within(point, REACH);
-        if near.is_empty() {
-            near = self.within(point, 3.0 * REACH);
+        self.weighted(point, self.reached(point, |_| true))
+    }
+
+    /// The vertices `keep` allows within [`REACH`] of `point`, else within three times as far,
+    /// with their distances.
+    fn reached(&self, point: Vec3, keep: impl Fn(u32) -> bool) -> Vec<(f32, u32)> {
+        let kept = |radius: f32| -> Vec<(f32, u32)> {
+            self.within(point, radius)
+                .into_iter()
+                .filter(|&(_, k)| keep(k))
+                .collect()
+        };
+        let near = kept(REACH);
+        match near.is_empty() {
+            true => kept(3.0 * REACH),
+            false => near,
         }
-        self.weighted(point, near)
     }
 
     /// The corners of the body surface seen nearest the point's pixel (`beside`): what a held
@@ -623,15 +642,7 @@ impl<'a> Anchors<'a> {
     /// hang from near it (the skull, the neck, the torso; not the face, which expressions move,
     /// nor the arms), averaged with the anchors' distance falloff.
     fn hair_joints(&self, point: Vec3) -> Vec<(u16, f32)> {
-        let hangs_from = |near: Vec<(f32, u32)>| -> Vec<(f32, u32)> {
-            near.into_iter()
-                .filter(|&(_, k)| self.hangs_from[k as usize])
-                .collect()
-        };
-        let mut near = hangs_from(self.within(point, REACH));
-        if near.is_empty() {
-            near = hangs_from(self.within(point, 3.0 * REACH));
-        }
+        let near = self.reached(point, |k| self.hangs_from[k as usize]);
         let total: f32 = near.iter().map(|&(d, _)| falloff(d)).sum();
         self.joints_of(near.into_iter().map(|(d, k)| (k, falloff(d) / total)))
     }
@@ -674,20 +685,14 @@ impl<'a> Anchors<'a> {
         // is searched only when they do not.
         let near = self.within(point, REACH);
         for (slot, &(j, weight)) in joints.iter().enumerate() {
-            let closest = |candidates: &mut dyn Iterator<Item = (f32, u32)>| {
-                candidates
-                    .min_by(|a, b| a.0.total_cmp(&b.0))
-                    .map(|(_, k)| k)
-            };
             let nearby = closest(
-                &mut near
-                    .iter()
+                near.iter()
                     .copied()
                     .filter(|&(_, k)| self.rigid_for[k as usize].contains(&j)),
             );
             v[slot] = nearby.or_else(|| {
                 closest(
-                    &mut self.rigid[j as usize]
+                    self.rigid[j as usize]
                         .iter()
                         .map(|&k| (self.vertices[k as usize].distance_squared(point), k)),
                 )

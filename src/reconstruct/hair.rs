@@ -40,10 +40,10 @@ const BEHIND: f32 = 0.01;
 const SKULL_BELOW: f32 = 0.02;
 
 /// How far hair stands off the head of `posed` seen by `camera` on `mask` (`camera.width`²,
-/// row-major; the photo where it is `shown`), in metres, at most [`MAX_HAIR`]: the median run of person pixels past the
-/// head's outline above the crown and beside the head above the hairline, over a few columns
-/// each, where the photo shows them whole (a run cut by the photo's edge says nothing); 0
-/// without any.
+/// row-major; the photo where it is `shown`), in metres, at most [`MAX_HAIR`]: the median run of
+/// person pixels past the head's outline above the crown and beside the head above the hairline,
+/// over a few columns each, where the photo shows them whole (a run cut by the photo's edge, or
+/// by a padded square's padding, says nothing); 0 without any.
 pub fn thickness(
     body: &BodyModel,
     posed: &PosedBody,
