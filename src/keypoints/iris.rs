@@ -1,8 +1,15 @@
-//! Iris centres from MediaPipe's iris landmark model (`iris_landmark`): a 64² crop around one eye
-//! (RGB in [0, 1], NHWC) in; 71 eye-contour and brow points and 5 iris points (the centre, then
-//! four on the rim) in input pixels out. The crop is placed as MediaPipe's iris graph places it,
-//! by the face mesh's two corners of that eye. The model knows only the subject's right eye (on
-//! the image's left), so the left eye's crop is mirrored in and its points mirrored back.
+//! Iris centres and eyelids from MediaPipe's iris landmark model (`iris_landmark`): a 64² crop
+//! around one eye (RGB in [0, 1], NHWC) in; 71 eye-contour and brow points and 5 iris points (the
+//! centre, then four on the rim) in input pixels out. The crop is placed as MediaPipe's iris graph
+//! places it, by the face mesh's two corners of that eye. The model knows only the subject's right
+//! eye (on the image's left), so the left eye's crop is mirrored in and its points mirrored back.
+//!
+//! Its first 16 contour points are the eyelids' margins, which replace the face mesh's own
+//! between the corners, as MediaPipe's refined face mesh has them: from its crop of the whole
+//! face the face mesh leaves shut eyes open, and the fit took the clip's shut eyes for open ones
+//! (`shut_eyes_are_fitted_shut` in tests/fit.rs). The corners stay the face mesh's, which placed
+//! the crop: the eye's place and span are what the face's fit sizes the head by, and the model's
+//! own corners on a drawn eye put the drawn head's shoulders 15 px off (`tests/framing.rs`).
 
 use std::path::Path;
 
@@ -25,6 +32,24 @@ const EYE_CROP_SCALE: f32 = 2.3;
 /// Face-mesh corners of each eye, image-left corner first (upright): the subject's right eye
 /// from its outer to inner corner, the left from inner to outer.
 const EYE_CORNERS: [(Side, [usize; 2]); 2] = [(Side::Right, [33, 133]), (Side::Left, [362, 263])];
+/// The face-mesh points of the model's first 16 contour points (lower lid from corner to corner,
+/// then the upper lid between them), for the eye the model sees (`UpdateFaceLandmarks`'s table):
+/// the subject's right eye, and its mirror image, the left.
+const EYELIDS: [(Side, [usize; EYELID_POINTS]); 2] = [
+    (
+        Side::Right,
+        [
+            33, 7, 163, 144, 145, 153, 154, 155, 133, 246, 161, 160, 159, 158, 157, 173,
+        ],
+    ),
+    (
+        Side::Left,
+        [
+            263, 249, 390, 373, 374, 380, 381, 382, 362, 466, 388, 387, 386, 385, 384, 398,
+        ],
+    ),
+];
+const EYELID_POINTS: usize = 16;
 
 /// One eye's iris found on a photo.
 #[derive(Clone, Debug, PartialEq)]
@@ -70,11 +95,12 @@ impl IrisLandmarker {
         Ok((contour, iris))
     }
 
-    /// Both irises in the eyes of a face mesh found on `source`.
+    /// Both irises in the eyes of a face mesh found on `source`; the face mesh's eyelid points
+    /// between the corners move to where the iris model finds the lids.
     pub fn detect(
         &mut self,
         source: &SourceImage,
-        face: &FaceLandmarks,
+        face: &mut FaceLandmarks,
     ) -> Result<Vec<Iris>, OnnxError> {
         EYE_CORNERS
             .iter()
@@ -85,7 +111,7 @@ impl IrisLandmarker {
                 if mirrored {
                     mirror_rows(&mut input, IRIS_INPUT);
                 }
-                let (_, iris) = self.run(&input)?;
+                let (contour, iris) = self.run(&input)?;
                 let to_image = |p: &[f32; 3]| {
                     let x = if mirrored {
                         IRIS_INPUT as f32 - p[0]
@@ -94,6 +120,15 @@ impl IrisLandmarker {
                     };
                     roi.to_image(Vec2::new(x, p[1]), IRIS_INPUT)
                 };
+                if let Some((_, points)) = EYELIDS.iter().find(|(s, _)| *s == side) {
+                    for (&i, p) in points
+                        .iter()
+                        .zip(&contour)
+                        .filter(|(i, _)| **i != a && **i != b)
+                    {
+                        face.points[i] = to_image(p);
+                    }
+                }
                 let centre = to_image(&iris[0]);
                 let radius = iris[1..]
                     .iter()

@@ -280,8 +280,8 @@ impl Landmarkers {
             }
             self.hands_from_palms(source, &pose, &mut hands)?;
         }
-        let face = self.face(source, &pose)?;
-        let irises = match &face {
+        let mut face = self.face(source, &pose)?;
+        let irises = match &mut face {
             Some(face) => self.iris.detect(source, face)?,
             None => Vec::new(),
         };

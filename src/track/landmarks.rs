@@ -100,7 +100,7 @@ impl LandmarkTracker {
             Some(roi) => models.face.detect_passes(source, roi, 1)?,
             None => None,
         };
-        let face = match face {
+        let mut face = match face {
             Some(face) => Some(face),
             None => {
                 runs.face_search = true;
@@ -131,7 +131,7 @@ impl LandmarkTracker {
             hands.extend(hand);
         }
         lap(&mut runs, 2);
-        let irises = match &face {
+        let irises = match &mut face {
             Some(face) => models.iris.detect(source, face)?,
             None => Vec::new(),
         };
