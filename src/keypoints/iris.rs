@@ -29,13 +29,11 @@ const CONTOUR_POINTS: usize = 71;
 const IRIS_POINTS: usize = 5;
 /// MediaPipe's crop: 2.3× the eye corners' longer extent (`IrisLandmarkLandmarksToRoi`).
 const EYE_CROP_SCALE: f32 = 2.3;
-/// Face-mesh corners of each eye, image-left corner first (upright): the subject's right eye
-/// from its outer to inner corner, the left from inner to outer.
-const EYE_CORNERS: [(Side, [usize; 2]); 2] = [(Side::Right, [33, 133]), (Side::Left, [362, 263])];
-/// The face-mesh points of the model's first 16 contour points (lower lid from corner to corner,
-/// then the upper lid between them), for the eye the model sees (`UpdateFaceLandmarks`'s table):
-/// the subject's right eye, and its mirror image, the left.
-const EYELIDS: [(Side, [usize; EYELID_POINTS]); 2] = [
+/// Each eye's face-mesh points that the model's first 16 contour points stand for (lower lid
+/// from corner to corner, then the upper lid between them; `UpdateFaceLandmarks`'s table), for
+/// the eye the model sees: the subject's right eye, and its mirror image, the left. Points 0 and
+/// 8 are the corners, which place the crop.
+const EYES: [(Side, [usize; EYELID_POINTS]); 2] = [
     (
         Side::Right,
         [
@@ -102,11 +100,15 @@ impl IrisLandmarker {
         source: &SourceImage,
         face: &mut FaceLandmarks,
     ) -> Result<Vec<Iris>, OnnxError> {
-        EYE_CORNERS
-            .iter()
-            .map(|&(side, [a, b])| {
-                let roi = Roi::eye(face.points[a], face.points[b], EYE_CROP_SCALE);
+        EYES.iter()
+            .map(|&(side, lids)| {
                 let mirrored = side == Side::Left;
+                // The image-left corner first (upright): the right eye's outer, the left's inner.
+                let [a, b] = match mirrored {
+                    false => [lids[0], lids[8]],
+                    true => [lids[8], lids[0]],
+                };
+                let roi = Roi::eye(face.points[a], face.points[b], EYE_CROP_SCALE);
                 let mut input = roi.sample(source, IRIS_INPUT);
                 if mirrored {
                     mirror_rows(&mut input, IRIS_INPUT);
@@ -120,14 +122,12 @@ impl IrisLandmarker {
                     };
                     roi.to_image(Vec2::new(x, p[1]), IRIS_INPUT)
                 };
-                if let Some((_, points)) = EYELIDS.iter().find(|(s, _)| *s == side) {
-                    for (&i, p) in points
-                        .iter()
-                        .zip(&contour)
-                        .filter(|(i, _)| **i != a && **i != b)
-                    {
-                        face.points[i] = to_image(p);
-                    }
+                for (&i, p) in lids
+                    .iter()
+                    .zip(&contour)
+                    .filter(|(i, _)| **i != a && **i != b)
+                {
+                    face.points[i] = to_image(p);
                 }
                 let centre = to_image(&iris[0]);
                 let radius = iris[1..]
