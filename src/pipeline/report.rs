@@ -52,9 +52,9 @@ pub struct Report {
     /// Default mode: texels filled from their mirror image.
     pub mirrored: usize,
     pub behind: usize,
-    /// Default mode: texels of hands the photo does not show, coloured as the hand or the face's
-    /// skin.
-    pub hands: usize,
+    /// Default mode: texels of hands and teeth the photo does not show, coloured as what it shows
+    /// of them or from the face's skin.
+    pub unseen_parts: usize,
     /// Default mode: texels of the body below the photo's bottom edge, coloured as the edge shows it.
     pub past_edge: usize,
     /// Default mode: how far hair stands off the head (metres), and the Gaussians of its shell
@@ -81,7 +81,7 @@ impl Report {
         self.observed = core.observed;
         self.mirrored = core.mirrored;
         self.behind = core.behind;
-        self.hands = core.hands;
+        self.unseen_parts = core.unseen_parts;
         self.past_edge = core.past_edge;
         self.hair = core.hair;
         self.hair_shell = core.hair_shell;
@@ -123,13 +123,13 @@ impl Report {
             ),
             None => format!(
                 "{} of {} texels seen, {} mirrored, {} on the back from the front, {} on unseen \
-                 parts of the hands, {} below the photo's edge, rest inpainted; {} Gaussians \
-                 beyond the body; {} on parts the photo did not show left out",
+                 parts of the hands and teeth, {} below the photo's edge, rest inpainted; {} \
+                 Gaussians beyond the body; {} on parts the photo did not show left out",
                 self.observed,
                 self.texels,
                 self.mirrored,
                 self.behind,
-                self.hands,
+                self.unseen_parts,
                 self.past_edge,
                 self.extras,
                 self.left_out
@@ -185,14 +185,14 @@ impl Report {
             ),
             None => format!(
                 "texels: {} valid, {} seen by the camera, {} filled by symmetry, {} on the back from \
-                 the front, {} on unseen parts of the hands, {} below the photo's edge from \
-                 the edge, the rest inpainted; {} Gaussians for the person's pixels beyond the \
+                 the front, {} on unseen parts of the hands and teeth, {} below the photo's edge \
+                 from the edge, the rest inpainted; {} Gaussians for the person's pixels beyond the \
                  body; {} on parts the photo did not show left out",
                 self.texels,
                 self.observed,
                 self.mirrored,
                 self.behind,
-                self.hands,
+                self.unseen_parts,
                 self.past_edge,
                 self.extras,
                 self.left_out

@@ -204,7 +204,7 @@ fn group_priors(
                 // The face: the head's front below the hairline; the scalp may wear hair.
                 Some("head") => {
                     let p = body.vertices[v];
-                    head.is_some_and(|h| super::hands::on_face(h, p))
+                    head.is_some_and(|h| super::unseen_parts::on_face(h, p))
                         || ears.iter().any(|e| e.distance(p) < EAR_RADIUS)
                 }
                 Some(_) => true,

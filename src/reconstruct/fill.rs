@@ -17,9 +17,9 @@ pub enum FillSource {
     Mirrored,
     /// The back, from the front in front of it.
     Behind,
-    /// A hand's part the photo does not show, from what it shows of the hand or the face's
-    /// skin ([`super::hands`]).
-    Hand,
+    /// A part of a hand or the teeth the photo does not show, from what it shows of it or the
+    /// face's skin ([`super::unseen_parts`]).
+    UnseenPart,
     /// The body below the photo's bottom edge, from what the edge shows ([`super::past_edge`]).
     PastEdge,
     Inpainted,
@@ -41,7 +41,7 @@ pub struct FilledTexture {
 }
 
 /// Fills `texture` over the valid texels of `uv`, with `guesses` (a colour and what it came
-/// from: [`FillSource::Behind`], [`FillSource::Hand`] or [`FillSource::PastEdge`]) where neither
+/// from: [`FillSource::Behind`], [`FillSource::UnseenPart`] or [`FillSource::PastEdge`]) where neither
 /// the texel nor its mirror image was seen. Returns `None` if no texel was observed.
 pub fn fill(
     uv: &UvMap,

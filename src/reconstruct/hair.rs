@@ -13,7 +13,7 @@
 use glam::{Mat3A, Vec2, Vec3};
 
 use super::extras::{Extra, PERSON, push};
-use super::hands::FACE_BELOW;
+use super::unseen_parts::FACE_BELOW;
 use crate::avatar::{SkinnedGaussians, quat_from_matrix};
 use crate::body::{BodyModel, PosedBody};
 use crate::camera::Camera;

@@ -16,9 +16,9 @@ pub mod displacement;
 pub mod extras;
 pub mod fill;
 pub mod hair;
-pub mod hands;
 pub mod past_edge;
 pub mod texture;
+pub mod unseen_parts;
 pub mod uv_map;
 
 use std::collections::BTreeMap;
@@ -72,8 +72,9 @@ pub struct Report {
     pub mirrored: usize,
     /// Texels of the back coloured from the front in front of them.
     pub behind: usize,
-    /// Texels of hands the photo does not show, coloured as the hand or the face's skin.
-    pub hands: usize,
+    /// Texels of hands and teeth the photo does not show, coloured as what it shows of them or
+    /// from the face's skin.
+    pub unseen_parts: usize,
     /// Texels of the body below the photo's bottom edge, coloured as the edge shows the person there.
     pub past_edge: usize,
     /// GUAVA mode: UV Gaussians dropped at opacity ≤ 0.001.
@@ -144,14 +145,8 @@ pub fn reconstruct_default(
     }
 
     clock.start(Stage::TextureMap, progress)?;
-    let sampled = texture::inverse_texture_map(
-        uv,
-        &posed.vertices,
-        &body.triangles,
-        camera,
-        &photo,
-        &fragments,
-    );
+    let sampled =
+        texture::inverse_texture_map(uv, body, &posed.vertices, camera, &photo, &fragments);
     report.observed = sampled.observed();
 
     clock.start(Stage::Fill, progress)?;
@@ -168,12 +163,12 @@ pub fn reconstruct_default(
     );
     let guesses: Vec<_> = behind::behind(body, uv, &sampled, crown)
         .into_iter()
-        .zip(hands::unseen_hands(body, uv, &sampled))
+        .zip(unseen_parts::unseen_parts(body, uv, &sampled))
         .zip(past)
-        .map(|((back, hand), past)| {
+        .map(|((back, part), past)| {
             // An unseen hand is a hand on its back too, not the sleeve in front of it; below the
             // photo's bottom edge the back goes on with what the edge shows, as the front does.
-            (hand.map(|c| (FillSource::Hand, c)))
+            (part.map(|c| (FillSource::UnseenPart, c)))
                 .or(past.map(|c| (FillSource::PastEdge, c)))
                 .or(back.map(|c| (FillSource::Behind, c)))
         })
@@ -182,7 +177,7 @@ pub fn reconstruct_default(
     let count = |of: FillSource| filled.source.iter().filter(|&&s| s == of).count();
     report.mirrored = count(FillSource::Mirrored);
     report.behind = count(FillSource::Behind);
-    report.hands = count(FillSource::Hand);
+    report.unseen_parts = count(FillSource::UnseenPart);
     report.past_edge = count(FillSource::PastEdge);
 
     clock.start(Stage::Gaussians, progress)?;

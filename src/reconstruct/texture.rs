@@ -6,6 +6,7 @@
 use glam::Vec3;
 
 use super::uv_map::UvMap;
+use crate::body::BodyModel;
 use crate::camera::Camera;
 use crate::photo::SourceImage;
 use crate::raster::{Fragments, RASTER_NEAR};
@@ -14,6 +15,9 @@ use crate::raster::{Fragments, RASTER_NEAR};
 /// counts as the visible surface: covers the depth change across one pixel on a surface inclined
 /// up to ~80° to the view (tan 80° ≈ 5.7), below which [`MIN_COSINE`] rejects it anyway.
 const DEPTH_TOLERANCE_PIXELS: f32 = 6.0;
+/// Parts inside the mouth: a few millimetres behind closed lips, within [`DEPTH_TOLERANCE_PIXELS`]
+/// of them, so the depth test alone gave the teeth the lips' colour as if they were seen.
+const INSIDE_MOUTH: [&str; 3] = ["teeth", "tongue", "mouth_cavity"];
 /// Surfaces seen more obliquely than this (cosine of the angle between normal and view ray) are
 /// too foreshortened to sample: one pixel smears over many texels.
 pub const MIN_COSINE: f32 = 0.2;
@@ -39,16 +43,33 @@ impl UvTexture {
     }
 }
 
-/// Samples `source` for every valid texel of `uv` on the posed mesh `vertices`/`triangles` seen
-/// by `camera`; `fragments` is that mesh rasterized from `camera` at the source's size.
+/// Per triangle of `body`: whether it lies inside the mouth ([`INSIDE_MOUTH`], all three
+/// corners). The depth tolerance joins a texel to the surface in front of it only on the same
+/// side of the lips.
+fn inside_mouth(body: &BodyModel) -> Vec<bool> {
+    body.triangles
+        .iter()
+        .map(|t| {
+            t.iter().all(|&v| {
+                body.part_of(v as usize)
+                    .is_some_and(|p| INSIDE_MOUTH.contains(&p))
+            })
+        })
+        .collect()
+}
+
+/// Samples `source` for every valid texel of `uv` on `body` posed at `vertices`, seen by
+/// `camera`; `fragments` is that mesh rasterized from `camera` at the source's size.
 pub fn inverse_texture_map(
     uv: &UvMap,
+    body: &BodyModel,
     vertices: &[Vec3],
-    triangles: &[[u32; 3]],
     camera: &Camera,
     source: &SourceImage,
     fragments: &Fragments,
 ) -> UvTexture {
+    let triangles = &body.triangles;
+    let inside = inside_mouth(body);
     let n = (uv.size * uv.size) as usize;
     let mut out = UvTexture {
         size: uv.size,
@@ -75,9 +96,16 @@ pub fn inverse_texture_map(
             continue;
         }
         // Centre-at-integer coordinates, where the bilinear taps are the four nearest pixels.
-        let Some((rgb, mask)) =
-            sample_surface(fragments, source, q.x - 0.5, q.y - 0.5, q.z, t, camera)
-        else {
+        let Some((rgb, mask)) = sample_surface(
+            fragments,
+            source,
+            q.x - 0.5,
+            q.y - 0.5,
+            q.z,
+            t,
+            &inside,
+            camera,
+        ) else {
             continue;
         };
         out.rgb[i] = rgb;
@@ -87,9 +115,10 @@ pub fn inverse_texture_map(
 }
 
 /// The photo's colour (un-premultiplied) and mask at `(x, y)` from the bilinear taps that show
-/// the texel's own surface (its triangle, or within the depth tolerance of depth `z`). `None` if
-/// any tap shows a surface in front of it (hidden), or if too little of the taps is its surface
-/// or the person.
+/// the texel's own surface (its triangle, or one on the same side of the lips, `inside`, within
+/// the depth tolerance of depth `z`). `None` if any tap shows a surface in front of it (hidden),
+/// or if too little of the taps is its surface or the person.
+#[allow(clippy::too_many_arguments)]
 fn sample_surface(
     f: &Fragments,
     source: &SourceImage,
@@ -97,6 +126,7 @@ fn sample_surface(
     y: f32,
     z: f32,
     triangle: i32,
+    inside: &[bool],
     camera: &Camera,
 ) -> Option<([f32; 3], f32)> {
     let tolerance = DEPTH_TOLERANCE_PIXELS * camera.pixel_footprint(z);
@@ -114,9 +144,12 @@ fn sample_surface(
             continue;
         }
         let k = f.index(px as u32, py as u32);
-        let own = f.triangle[k] == triangle || (f.depth[k] - z).abs() <= tolerance;
+        let front = f.triangle[k];
+        let same_side = front >= 0 && inside[front as usize] == inside[triangle as usize];
+        let near = if same_side { tolerance } else { 0.0 };
+        let own = front == triangle || (same_side && (f.depth[k] - z).abs() <= tolerance);
         if !own {
-            if f.depth[k] < z - tolerance {
+            if f.depth[k] < z - near {
                 return None;
             }
             // A farther surface (or the background) behind the silhouette: not this texel's.
