@@ -640,7 +640,7 @@ fn fit_from(
         let expression_prior = EXPRESSION_PRIOR_PER_EYE_SPAN * eye_span as f64;
         unknowns.extend(fitted_expressions(body).map(|i| {
             (
-                Unknown::Coefficient(i, body.targets[i].range),
+                Unknown::Coefficient(i, body.targets[i].reach()),
                 expression_prior,
             )
         }));

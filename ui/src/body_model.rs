@@ -35,7 +35,7 @@ pub fn slider_groups(body: &AnyBody) -> Vec<SliderGroup> {
                 .map(|(index, t)| Slider {
                     index,
                     name: t.name.clone(),
-                    range: t.range,
+                    range: t.reach(),
                 })
                 .collect(),
             open: group == TargetGroup::Expression,
