@@ -96,16 +96,8 @@ pub fn inverse_texture_map(
             continue;
         }
         // Centre-at-integer coordinates, where the bilinear taps are the four nearest pixels.
-        let Some((rgb, mask)) = sample_surface(
-            fragments,
-            source,
-            q.x - 0.5,
-            q.y - 0.5,
-            q.z,
-            t,
-            &inside,
-            camera,
-        ) else {
+        let at = q - Vec3::new(0.5, 0.5, 0.0);
+        let Some((rgb, mask)) = sample_surface(fragments, source, at, t, &inside, camera) else {
             continue;
         };
         out.rgb[i] = rgb;
@@ -114,21 +106,19 @@ pub fn inverse_texture_map(
     out
 }
 
-/// The photo's colour (un-premultiplied) and mask at `(x, y)` from the bilinear taps that show
-/// the texel's own surface (its triangle, or one on the same side of the lips, `inside`, within
-/// the depth tolerance of depth `z`). `None` if any tap shows a surface in front of it (hidden),
-/// or if too little of the taps is its surface or the person.
-#[allow(clippy::too_many_arguments)]
+/// The photo's colour (un-premultiplied) and mask at `at`'s `(x, y)` from the bilinear taps that
+/// show the texel's own surface (its triangle, or one on the same side of the lips, `inside`,
+/// within the depth tolerance of depth `at.z`). `None` if any tap shows a surface in front of it
+/// (hidden), or if too little of the taps is its surface or the person.
 fn sample_surface(
     f: &Fragments,
     source: &SourceImage,
-    x: f32,
-    y: f32,
-    z: f32,
+    at: Vec3,
     triangle: i32,
     inside: &[bool],
     camera: &Camera,
 ) -> Option<([f32; 3], f32)> {
+    let (x, y, z) = (at.x, at.y, at.z);
     let tolerance = DEPTH_TOLERANCE_PIXELS * camera.pixel_footprint(z);
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);

@@ -20,8 +20,8 @@ use crate::body::BodyModel;
 type Guess = fn(&Skin) -> [f32; 3];
 /// The parts guessed, each with its guess.
 const PARTS: [(&str, Guess); 3] = [
-    ("hand.L", Skin::median),
-    ("hand.R", Skin::median),
+    ("hand.L", Skin::hand),
+    ("hand.R", Skin::hand),
     ("teeth", Skin::teeth),
 ];
 /// A part whose texels are seen (directly or through its mirror) less than this share of them
@@ -58,16 +58,16 @@ fn brightness(c: [f32; 3]) -> f32 {
 
 impl Skin {
     /// The face's skin from its seen texels' colours; `None` when there are none.
-    fn of(mut colours: Vec<[f32; 3]>) -> Option<Self> {
+    fn of(colours: Vec<[f32; 3]>) -> Option<Self> {
         let mut levels: Vec<f32> = colours.iter().map(|&c| brightness(c)).collect();
-        let colour = median(std::mem::take(&mut colours))?;
+        let colour = median(colours)?;
         let k = ((levels.len() - 1) as f32 * LIT_QUANTILE) as usize;
         let (_, &mut lit, _) = levels.select_nth_unstable_by(k, f32::total_cmp);
         Some(Self { colour, lit })
     }
 
     /// A hand the photo shows nothing of: the skin itself.
-    fn median(&self) -> [f32; 3] {
+    fn hand(&self) -> [f32; 3] {
         self.colour
     }
 
