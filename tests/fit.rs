@@ -722,10 +722,27 @@ fn gaze_fit_recovers_known_eye_turns() {
     }
 }
 
+/// The body's keypoints and face points where `pose` seen by `camera` puts them, fitted.
+fn fit_drawn_face(
+    body: &BodyModel,
+    pose: &BodyPose,
+    camera: &guava::camera::Camera,
+) -> (guava::tracking::SourceView, guava::fit::FitReport) {
+    let embedding = embed_face(body, &mut face_model()).expect("embeds");
+    let keypoints = project_keypoints(body, pose, camera);
+    let face = project_face(body, &embedding, pose, camera);
+    let input = FitInput {
+        keypoints: &keypoints,
+        face: Some((&face, &embedding)),
+        hands: &[],
+        irises: &[],
+    };
+    fit_keypoints(body, &input, 512).expect("fit")
+}
+
 #[test]
 fn face_fit_recovers_a_known_expression() {
     let body = BodyModel::default_body().expect("body");
-    let embedding = embed_face(&body, &mut face_model()).expect("embeds");
     let camera = synthetic::upper_body_camera(&body, 0.15);
     let mut pose = BodyPose::rest(&body);
     pose.set_rotation(&body, "head", Vec3::new(0.1, 0.2, 0.0))
@@ -740,15 +757,7 @@ fn face_fit_recovers_a_known_expression() {
     for (name, v) in truth {
         pose.set_coefficient(&body, name, v).expect("unit");
     }
-    let keypoints = project_keypoints(&body, &pose, &camera);
-    let face = project_face(&body, &embedding, &pose, &camera);
-    let input = FitInput {
-        keypoints: &keypoints,
-        face: Some((&face, &embedding)),
-        hands: &[],
-        irises: &[],
-    };
-    let (view, report) = fit_keypoints(&body, &input, 512).expect("fit");
+    let (view, report) = fit_drawn_face(&body, &pose, &camera);
     let f = report.face.clone().expect("face stage");
     println!(
         "body {:.2} px; face {:.2} px (rest expression {:.2} px), {} points, {} iterations",
@@ -814,21 +823,12 @@ fn face_fit_recovers_a_known_expression() {
 #[test]
 fn face_fit_follows_a_smile_broader_than_the_default_faces() {
     let body = BodyModel::default_body().expect("body");
-    let embedding = embed_face(&body, &mut face_model()).expect("embeds");
     let camera = synthetic::upper_body_camera(&body, 0.0);
     let mut pose = BodyPose::rest(&body);
     for name in ["mouthSmileLeft", "mouthSmileRight"] {
         pose.set_coefficient(&body, name, 1.4).expect("unit");
     }
-    let keypoints = project_keypoints(&body, &pose, &camera);
-    let face = project_face(&body, &embedding, &pose, &camera);
-    let input = FitInput {
-        keypoints: &keypoints,
-        face: Some((&face, &embedding)),
-        hands: &[],
-        irises: &[],
-    };
-    let (view, report) = fit_keypoints(&body, &input, 512).expect("fit");
+    let (view, report) = fit_drawn_face(&body, &pose, &camera);
     let unit = |name: &str| view.pose.coefficients[body.target_index(name).expect("unit")];
     let smile = [unit("mouthSmileLeft"), unit("mouthSmileRight")];
     let f = report.face.expect("face stage");
