@@ -14,6 +14,7 @@ pub mod behind;
 pub mod default_mode;
 pub mod displacement;
 pub mod extras;
+pub mod eyes;
 pub mod fill;
 pub mod hair;
 pub mod past_edge;
@@ -190,6 +191,14 @@ pub fn reconstruct_default(
         identity_of(body, &view.pose),
         source_name.into(),
     );
+    // The eyeballs finer than the UV map has them.
+    let sampler = texture::Sampler::new(body, &posed.vertices, camera, &photo, &fragments);
+    avatar.uv.append(eyes::fine_eyes(
+        body,
+        &posed.vertices,
+        &sampler,
+        &DiscStyle::default(),
+    ));
     avatar.source_view = Some(view.clone());
     avatar.displacements = displacements;
 

@@ -68,42 +68,94 @@ pub fn inverse_texture_map(
     source: &SourceImage,
     fragments: &Fragments,
 ) -> UvTexture {
-    let triangles = &body.triangles;
-    let inside = inside_mouth(body);
+    let sampler = Sampler::new(body, vertices, camera, source, fragments);
     let n = (uv.size * uv.size) as usize;
     let mut out = UvTexture {
         size: uv.size,
         rgb: vec![[0.0; 3]; n],
         confidence: vec![0.0; n],
     };
-    let eye = camera
-        .view_from_world
-        .inverse()
-        .transform_point3(Vec3::ZERO);
     for &texel in &uv.texels {
         let i = texel as usize;
-        let t = uv.triangle[i];
-        let tri = triangles[t as usize];
-        let [v0, v1, v2] = tri.map(|k| vertices[k as usize]);
-        let p = uv.point(i, vertices, triangles);
-        let normal = (v1 - v0).cross(v2 - v0).normalize_or_zero();
-        let cosine = normal.dot((eye - p).normalize_or_zero()).abs();
-        if cosine < MIN_COSINE {
-            continue;
+        let p = uv.point(i, vertices, &body.triangles);
+        if let Some((rgb, confidence)) = sampler.sample(uv.triangle[i] as u32, p) {
+            out.rgb[i] = rgb;
+            out.confidence[i] = confidence;
         }
-        let q = camera.project(p);
+    }
+    out
+}
+
+/// The photo seen at points of the posed surface: the depth test and the sampling of
+/// [`inverse_texture_map`], for any point (the UV map's texels, or finer where the map is coarse).
+pub(super) struct Sampler<'a> {
+    vertices: &'a [Vec3],
+    triangles: &'a [[u32; 3]],
+    camera: &'a Camera,
+    source: &'a SourceImage,
+    fragments: &'a Fragments,
+    inside: Vec<bool>,
+    /// The camera's centre.
+    eye: Vec3,
+}
+
+impl<'a> Sampler<'a> {
+    pub(super) fn new(
+        body: &'a BodyModel,
+        vertices: &'a [Vec3],
+        camera: &'a Camera,
+        source: &'a SourceImage,
+        fragments: &'a Fragments,
+    ) -> Self {
+        Self {
+            vertices,
+            triangles: &body.triangles,
+            camera,
+            source,
+            fragments,
+            inside: inside_mouth(body),
+            eye: camera
+                .view_from_world
+                .inverse()
+                .transform_point3(Vec3::ZERO),
+        }
+    }
+
+    /// The photo's colour at point `p` of triangle `t` and how well it is seen (the cosine
+    /// between normal and view ray times the mask); `None` where the camera does not see it.
+    pub(super) fn sample(&self, t: u32, p: Vec3) -> Option<([f32; 3], f32)> {
+        let [v0, v1, v2] = self.triangles[t as usize].map(|k| self.vertices[k as usize]);
+        let normal = (v1 - v0).cross(v2 - v0).normalize_or_zero();
+        let cosine = normal.dot((self.eye - p).normalize_or_zero()).abs();
+        if cosine < MIN_COSINE {
+            return None;
+        }
+        let q = self.camera.project(p);
         if !q.is_finite() || q.z <= RASTER_NEAR {
-            continue;
+            return None;
         }
         // Centre-at-integer coordinates, where the bilinear taps are the four nearest pixels.
         let at = q - Vec3::new(0.5, 0.5, 0.0);
-        let Some((rgb, mask)) = sample_surface(fragments, source, at, t, &inside, camera) else {
-            continue;
-        };
-        out.rgb[i] = rgb;
-        out.confidence[i] = cosine * mask;
+        let (rgb, mask) = sample_surface(
+            self.fragments,
+            self.source,
+            at,
+            t as i32,
+            &self.inside,
+            self.camera,
+        )?;
+        Some((rgb, cosine * mask))
     }
-    out
+
+    /// The camera's centre.
+    pub(super) fn eye(&self) -> Vec3 {
+        self.eye
+    }
+
+    /// Where the camera sees point `p`, in pixels.
+    pub(super) fn pixel(&self, p: Vec3) -> glam::Vec2 {
+        self.camera.project(p).truncate()
+    }
 }
 
 /// The photo's colour (un-premultiplied) and mask at `at`'s `(x, y)` from the bilinear taps that
