@@ -204,7 +204,7 @@ fn teeth_a_closed_mouth_hid_are_coloured_as_teeth() {
 /// are now also sampled on a finer lattice (`reconstruct::eyes`). Measured over the eyeballs'
 /// pixels: 0.106 from the truth on average (before: 0.464).
 #[test]
-fn an_open_eye_keeps_its_iris_and_pupil() {
+fn an_open_eye_keeps_its_iris() {
     let body = BodyModel::default_body().expect("default body");
     let mut renderer = crate::common::renderer();
     let subject = Subject::bare(&body);
