@@ -7,6 +7,7 @@ use guava::body::{BodyModel, BodyPose, PosedBody};
 use guava::camera::{Camera, GUAVA_INVTANFOV};
 use guava::eval::subjects::{VIEWS, reconstruct_subject_as, score};
 use guava::fit::{FitReport, fit_silhouette};
+use guava::keypoints::Side;
 use guava::photo::{Crop, SOURCE_SIZE, SourceImage};
 use guava::pipeline::{Mode, Photo, Pipeline, Tracked};
 use guava::raster::rasterize;
@@ -208,14 +209,10 @@ fn an_open_eye_keeps_its_iris() {
     let body = BodyModel::default_body().expect("default body");
     let mut renderer = crate::common::renderer();
     let subject = Subject::bare(&body);
-    let front = |part: &str| {
-        (0..body.vertices.len())
-            .filter(|&v| body.part_of(v) == Some(part))
-            .map(|v| body.vertices[v])
-            .max_by(|a, b| a.z.total_cmp(&b.z))
-            .expect(part)
-    };
-    let pupils = [front("eye_front.L"), front("eye_front.R")];
+    let pupils = [Side::Left, Side::Right].map(|side| {
+        let pupil = guava::fit::pupil(&body, side).expect("the eye's front");
+        body.vertices[pupil.vertices[0] as usize]
+    });
     // The eyeballs: within 12.5 mm of a centre 12 mm behind the pupil (the lids lie outside);
     // within 6 mm of the pupil sideways, the iris.
     let on_eye = |p: Vec3| {

@@ -47,16 +47,23 @@ pub(super) fn fine_eyes(
     sampler: &Sampler,
     style: &DiscStyle,
 ) -> UvGaussians {
+    let (ids, tris): (Vec<usize>, Vec<[u32; 3]>) = body
+        .triangles
+        .iter()
+        .enumerate()
+        .filter(|(_, tri)| {
+            tri.iter().all(|&v| {
+                body.part_of(v as usize)
+                    .is_some_and(|p| FINE_PARTS.contains(&p))
+            })
+        })
+        .unzip();
     let mut frames = Vec::new();
-    triangle_frames(vertices, &body.triangles, &mut frames);
+    triangle_frames(vertices, &tris, &mut frames);
     let lattices: Vec<Vec<[f32; 3]>> = (0..=MAX_SUBDIVISIONS).map(lattice).collect();
     let mut out = UvGaussians::default();
-    for (t, (tri, frame)) in body.triangles.iter().zip(&frames).enumerate() {
-        let fine = tri.iter().all(|&v| {
-            body.part_of(v as usize)
-                .is_some_and(|p| FINE_PARTS.contains(&p))
-        });
-        if !fine || frame.scale <= 0.0 {
+    for ((&t, tri), frame) in ids.iter().zip(&tris).zip(&frames) {
+        if frame.scale <= 0.0 {
             continue;
         }
         let corners = tri.map(|v| vertices[v as usize]);

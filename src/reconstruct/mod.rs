@@ -146,8 +146,8 @@ pub fn reconstruct_default(
     }
 
     clock.start(Stage::TextureMap, progress)?;
-    let sampled =
-        texture::inverse_texture_map(uv, body, &posed.vertices, camera, &photo, &fragments);
+    let sampler = texture::Sampler::new(body, &posed.vertices, camera, &photo, &fragments);
+    let sampled = sampler.texture(uv);
     report.observed = sampled.observed();
 
     clock.start(Stage::Fill, progress)?;
@@ -192,7 +192,6 @@ pub fn reconstruct_default(
         source_name.into(),
     );
     // The eyeballs finer than the UV map has them.
-    let sampler = texture::Sampler::new(body, &posed.vertices, camera, &photo, &fragments);
     avatar.uv.append(eyes::fine_eyes(
         body,
         &posed.vertices,

@@ -68,26 +68,11 @@ pub fn inverse_texture_map(
     source: &SourceImage,
     fragments: &Fragments,
 ) -> UvTexture {
-    let sampler = Sampler::new(body, vertices, camera, source, fragments);
-    let n = (uv.size * uv.size) as usize;
-    let mut out = UvTexture {
-        size: uv.size,
-        rgb: vec![[0.0; 3]; n],
-        confidence: vec![0.0; n],
-    };
-    for &texel in &uv.texels {
-        let i = texel as usize;
-        let p = uv.point(i, vertices, &body.triangles);
-        if let Some((rgb, confidence)) = sampler.sample(uv.triangle[i] as u32, p) {
-            out.rgb[i] = rgb;
-            out.confidence[i] = confidence;
-        }
-    }
-    out
+    Sampler::new(body, vertices, camera, source, fragments).texture(uv)
 }
 
-/// The photo seen at points of the posed surface: the depth test and the sampling of
-/// [`inverse_texture_map`], for any point (the UV map's texels, or finer where the map is coarse).
+/// The photo seen at points of the posed surface: the depth test and the sampling, for the UV
+/// map's texels ([`Sampler::texture`]) or any other point (finer where the map is coarse).
 pub(super) struct Sampler<'a> {
     vertices: &'a [Vec3],
     triangles: &'a [[u32; 3]],
@@ -119,6 +104,25 @@ impl<'a> Sampler<'a> {
                 .inverse()
                 .transform_point3(Vec3::ZERO),
         }
+    }
+
+    /// The photo in UV space: every valid texel of `uv` sampled.
+    pub(super) fn texture(&self, uv: &UvMap) -> UvTexture {
+        let n = (uv.size * uv.size) as usize;
+        let mut out = UvTexture {
+            size: uv.size,
+            rgb: vec![[0.0; 3]; n],
+            confidence: vec![0.0; n],
+        };
+        for &texel in &uv.texels {
+            let i = texel as usize;
+            let p = uv.point(i, self.vertices, self.triangles);
+            if let Some((rgb, confidence)) = self.sample(uv.triangle[i] as u32, p) {
+                out.rgb[i] = rgb;
+                out.confidence[i] = confidence;
+            }
+        }
+        out
     }
 
     /// The photo's colour at point `p` of triangle `t` and how well it is seen (the cosine
