@@ -21,6 +21,12 @@
 //! as one rg32float texel: a pixel of 32 channels is 9 stores, not 34 (on lavapipe that saved about
 //! a tenth of the 32-channel rasterize at 10k Gaussians). Textures, not buffers: a 4096² image of 32
 //! channels is 2 GiB, beyond what adapters bind as one storage buffer (128 MiB on lavapipe).
+//! llvmpipe counts the iterations of all loops of an invocation (a SIMD row of 8 threads, one
+//! block) together and, past 65535, silently leaves every loop (LP_MAX_TGSI_LOOP_ITERATIONS in
+//! Mesa's gallivm), so a tile with a long list would leave whole blocks unwritten. The walk
+//! takes up to four Gaussians per iteration, and on CPU adapters (SKIP_MISSED = 1) a tile whose
+//! walk would run past LOOP_BUDGET stops there and counts itself in STAT_CUT_SHORT: its pixels
+//! keep the front-most Gaussians (the list is sorted by depth) and the frame says so.
 //! CHANNELS, PIXELS and SKIP_MISSED are constants prepended by src/render/shader.rs.
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -37,6 +43,7 @@ const FEATURE_WORDS: u32 = (CHANNELS + 3u) / 4u;
 @group(0) @binding(6) var out_features: texture_storage_2d_array<rgba32float, write>;
 // One layer: accumulated alpha 1 − T and Σ αT/z.
 @group(0) @binding(7) var out_aux: texture_storage_2d_array<rg32float, write>;
+@group(0) @binding(8) var<storage, read_write> stats: array<atomic<u32>>;
 
 const TILE_PIXELS: u32 = TILE_SIZE * TILE_SIZE;
 const THREADS: u32 = TILE_PIXELS / PIXELS;
@@ -62,7 +69,15 @@ const MASK_WORDS: u32 = BATCH / 32u;
 var<workgroup> batch_blocks: array<u32, BATCH>;
 var<workgroup> block_masks: array<u32, BLOCKS * MASK_WORDS>;
 var<workgroup> num_done: atomic<u32>;
-var<workgroup> done_snapshot: u32;
+var<workgroup> over_budget: atomic<u32>;
+// Bit 0: every pixel done; bit 1: a block ran out of loop budget.
+var<workgroup> stop_snapshot: u32;
+// Loop iterations a block may run, as counted in `main`, below llvmpipe's 65535: per batch the
+// batch loop, the mask words' loop and blocks_reached's loop over the blocks (which llvmpipe
+// leaves rolled at 16 blocks), per walk step one. The per-pixel and per-word loops unroll: on
+// lavapipe a block stored its pixels after 63.4k iterations counted without them.
+const LOOP_BUDGET: u32 = select(0xffffffffu, 60000u, SKIP_MISSED == 1u);
+const BATCH_LOOPS: u32 = 2u + BLOCKS;
 
 struct Batched {
     xy: vec2<f32>,
@@ -118,6 +133,55 @@ fn build_block_masks(lid: u32) {
     }
 }
 
+// A thread's pixels: accumulated features, transmittance, Σ αT/z, which are done, how many are not.
+struct Pixels {
+    acc: array<vec4<f32>, PIXELS * FEATURE_WORDS>,
+    t: array<f32, PIXELS>,
+    inv_depth: array<f32, PIXELS>,
+    done: array<bool, PIXELS>,
+    pending: u32,
+}
+
+// Blends batched Gaussian j into a thread's pixels, front to back.
+fn shade(px: ptr<function, Pixels>, j: u32, lid: u32, lane: u32, origin: vec2<u32>) {
+    let g = load_batched(j, lane);
+    let co = g.conic_opacity;
+    var held: HeldFeatures;
+    if !PACKED {
+        held = hold_features(g.id, lane);
+    }
+    for (var k = 0u; k < PIXELS; k++) {
+        if (*px).done[k] {
+            continue;
+        }
+        let d = g.xy - vec2<f32>(origin + block_pixel(lid, k));
+        let power = -0.5 * (co.x * d.x * d.x + co.z * d.y * d.y) - co.y * d.x * d.y;
+        if power > 0.0 {
+            continue;
+        }
+        let alpha = min(0.99, co.w * exp(power));
+        if alpha < 1.0 / 255.0 {
+            continue;
+        }
+        let test_t = (*px).t[k] * (1.0 - alpha);
+        if test_t < 0.0001 {
+            (*px).done[k] = true;
+            (*px).pending -= 1u;
+            continue;
+        }
+        let w = alpha * (*px).t[k];
+        if PACKED {
+            (*px).acc[k] += g.packed_features * w;
+        } else {
+            for (var q = 0u; q < FEATURE_WORDS; q++) {
+                (*px).acc[k * FEATURE_WORDS + q] += feature_word(held, g.id, q) * w;
+            }
+        }
+        (*px).inv_depth[k] += g.inv_depth * w;
+        (*px).t[k] = test_t;
+    }
+}
+
 @compute @workgroup_size(THREADS)
 fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -128,32 +192,34 @@ fn main(
     let block = lid / BLOCK_THREADS;
     let lane = lid % BLOCK_THREADS;
 
-    var acc: array<vec4<f32>, PIXELS * FEATURE_WORDS>;
-    var t: array<f32, PIXELS>;
-    var inv_depth: array<f32, PIXELS>;
-    var done: array<bool, PIXELS>;
-    var pending = 0u;
+    var px: Pixels;
     for (var k = 0u; k < PIXELS; k++) {
         let pix = origin + block_pixel(lid, k);
-        t[k] = 1.0;
-        done[k] = pix.x >= frame.size.x || pix.y >= frame.size.y;
-        if !done[k] {
-            pending += 1u;
+        px.t[k] = 1.0;
+        px.done[k] = pix.x >= frame.size.x || pix.y >= frame.size.y;
+        if !px.done[k] {
+            px.pending += 1u;
         }
     }
-    atomicAdd(&num_done, PIXELS - pending);
+    atomicAdd(&num_done, PIXELS - px.pending);
 
     var start = range.x;
+    var loops = 0u;
     loop {
-        // Leave together (barriers must stay in uniform control flow): list exhausted or all done.
+        // Leave together (barriers must stay in uniform control flow): list exhausted, all done
+        // or out of loop budget.
         workgroupBarrier();
         if lid == 0u {
-            done_snapshot = atomicLoad(&num_done);
+            stop_snapshot = u32(atomicLoad(&num_done) == TILE_PIXELS) | (atomicLoad(&over_budget) << 1u);
         }
-        let all_done = workgroupUniformLoad(&done_snapshot) == TILE_PIXELS;
-        if start >= range.y || all_done {
+        let stop = workgroupUniformLoad(&stop_snapshot);
+        if stop >= 2u && lid == 0u {
+            atomicAdd(&stats[STAT_CUT_SHORT], 1u);
+        }
+        if start >= range.y || stop != 0u {
             break;
         }
+        loops += BATCH_LOOPS;
         let fetch = start + lid;
         var reach = 0u;
         if fetch < range.y {
@@ -175,77 +241,71 @@ fn main(
         }
         workgroupBarrier();
         let n = min(BATCH, range.y - start);
-        let pending_before = pending;
-        // The walk: with SKIP_MISSED the set bits of this block's masks, else every batched Gaussian.
-        // The next mask word is fetched by an iteration of this one loop: the same fetch as a
-        // nested `while` made llvmpipe leave whole blocks without a Gaussian in dense tiles
-        // (test a_dense_avatar_drawn_small_matches_the_reference_on_every_tuning).
+        let pending_before = px.pending;
+        // The walk: with SKIP_MISSED the set bits of this block's mask words, else every batched
+        // Gaussian; up to four of them per iteration, written out, for llvmpipe's loop budget
+        // (above): with one per iteration an avatar drawn within one tile (~60k Gaussians a
+        // block) left whole blocks unwritten (test an_avatar_drawn_within_a_tile_matches_the_
+        // reference). Checking the block's pixels once per four changes no pixel: a done pixel
+        // takes nothing more.
         var mask_word = 0u;
         var bits = 0u;
         var next = 0u;
         loop {
-            var j: u32;
+            loops += 1u;
+            if loops >= LOOP_BUDGET {
+                atomicStore(&over_budget, 1u);
+                break;
+            }
+            if block_done(px.pending, lane) {
+                break;
+            }
             if SKIP_MISSED == 1u {
                 if bits == 0u {
-                    if mask_word == MASK_WORDS || block_done(pending, lane) {
+                    if mask_word == MASK_WORDS {
                         break;
                     }
                     bits = block_masks[block * MASK_WORDS + mask_word];
                     mask_word++;
-                    continue;
                 }
-                if block_done(pending, lane) {
-                    break;
+                let first = (mask_word - 1u) * 32u;
+                // A block's lanes share `bits`, so each step is taken by all of them or none.
+                if bits != 0u {
+                    shade(&px, first + firstTrailingBit(bits), lid, lane, origin);
+                    bits &= bits - 1u;
                 }
-                j = (mask_word - 1u) * 32u + firstTrailingBit(bits);
-                bits &= bits - 1u;
+                if bits != 0u {
+                    shade(&px, first + firstTrailingBit(bits), lid, lane, origin);
+                    bits &= bits - 1u;
+                }
+                if bits != 0u {
+                    shade(&px, first + firstTrailingBit(bits), lid, lane, origin);
+                    bits &= bits - 1u;
+                }
+                if bits != 0u {
+                    shade(&px, first + firstTrailingBit(bits), lid, lane, origin);
+                    bits &= bits - 1u;
+                }
             } else {
-                if next >= n || block_done(pending, lane) {
+                if next >= n {
                     break;
                 }
-                j = next;
-                next++;
-            }
-            let g = load_batched(j, lane);
-            let co = g.conic_opacity;
-            var held: HeldFeatures;
-            if !PACKED {
-                held = hold_features(g.id, lane);
-            }
-            for (var k = 0u; k < PIXELS; k++) {
-                if done[k] {
-                    continue;
+                shade(&px, next, lid, lane, origin);
+                if next + 1u < n {
+                    shade(&px, next + 1u, lid, lane, origin);
                 }
-                let d = g.xy - vec2<f32>(origin + block_pixel(lid, k));
-                let power = -0.5 * (co.x * d.x * d.x + co.z * d.y * d.y) - co.y * d.x * d.y;
-                if power > 0.0 {
-                    continue;
+                if next + 2u < n {
+                    shade(&px, next + 2u, lid, lane, origin);
                 }
-                let alpha = min(0.99, co.w * exp(power));
-                if alpha < 1.0 / 255.0 {
-                    continue;
+                if next + 3u < n {
+                    shade(&px, next + 3u, lid, lane, origin);
                 }
-                let test_t = t[k] * (1.0 - alpha);
-                if test_t < 0.0001 {
-                    done[k] = true;
-                    pending -= 1u;
-                    continue;
-                }
-                let w = alpha * t[k];
-                if PACKED {
-                    acc[k] += g.packed_features * w;
-                } else {
-                    for (var q = 0u; q < FEATURE_WORDS; q++) {
-                        acc[k * FEATURE_WORDS + q] += feature_word(held, g.id, q) * w;
-                    }
-                }
-                inv_depth[k] += g.inv_depth * w;
-                t[k] = test_t;
+                next += 4u;
             }
         }
         // Counted once per batch, not per finished pixel: num_done is read only at the loop's top.
-        if pending != pending_before {
-            atomicAdd(&num_done, pending_before - pending);
+        if px.pending != pending_before {
+            atomicAdd(&num_done, pending_before - px.pending);
         }
         start += BATCH;
     }
@@ -256,9 +316,9 @@ fn main(
             // Word by word, so each index into `acc` is a constant once the loops unroll. The
             // padding lanes stay zero: their features are zero and so is their background.
             for (var q = 0u; q < FEATURE_WORDS; q++) {
-                textureStore(out_features, pix, q, acc[k * FEATURE_WORDS + q] + t[k] * background[q]);
+                textureStore(out_features, pix, q, px.acc[k * FEATURE_WORDS + q] + px.t[k] * background[q]);
             }
-            textureStore(out_aux, pix, 0u, vec4<f32>(1.0 - t[k], inv_depth[k], 0.0, 0.0));
+            textureStore(out_aux, pix, 0u, vec4<f32>(1.0 - px.t[k], px.inv_depth[k], 0.0, 0.0));
         }
     }
 }

@@ -807,7 +807,8 @@ fn a_photo_is_read_upright_as_its_exif_orientation_says() {
 /// tile) matches the f64 reference under every rasterizer tuning, pose after pose. On lavapipe
 /// the CPU tunings' walk over a block's mask words, written as a nested `while`, left whole
 /// blocks without a single Gaussian (alpha 0 where the reference has 0.9999), differently after
-/// each earlier frame; the exports of a keyed camera path showed it.
+/// each earlier frame; the exports of a keyed camera path showed it. (The nested loop spent
+/// llvmpipe's loop budget faster: see the next test.)
 #[test]
 fn a_dense_avatar_drawn_small_matches_the_reference_on_every_tuning() {
     let body = body();
@@ -847,6 +848,79 @@ fn a_dense_avatar_drawn_small_matches_the_reference_on_every_tuning() {
                 renderer.pipelines.tuning
             );
         }
+    }
+}
+
+/// The whole avatar drawn within one tile (the synthetic subject's 127k Gaussians at 16², and at
+/// 32² over four) matches the f64 reference under every rasterizer tuning. llvmpipe leaves every
+/// loop of a shader invocation once they have run 65535 iterations together (Mesa's
+/// LP_MAX_TGSI_LOOP_ITERATIONS): walking one Gaussian per iteration, blocks of such a tile were
+/// never written and nothing said so (16²: 9.3 dB PSNR against the reference on the CPU
+/// tunings; 114.6 dB now). Past what the CPU tunings' loop budget covers (the cloud three times over,
+/// 380k in the tile), every pixel is still written, front-most Gaussians first, and the frame
+/// counts the tile as cut short.
+#[test]
+fn an_avatar_drawn_within_a_tile_matches_the_reference() {
+    let body = body();
+    let (view, image) = rest_photo();
+    let (avatar, _) = reconstruct(&view, &image).expect("reconstruct");
+    let cloud = cloud_for(&avatar, &BodyPose::rest(body));
+    let background = [0.25; 4];
+    let camera = |side| {
+        let look = guava::camera::orbit_y_up(glam::Vec3::new(0.0, 0.0, 0.12), 2.33, 0.3, 0.0);
+        Camera::from_fov_y(look, side, side, 50f32.to_radians())
+    };
+    for side in [16, 32] {
+        let camera = camera(side);
+        let (reference, _) = guava::render::reference::render(&cloud, &camera, &background);
+        assert!(
+            reference.alpha.iter().any(|&a| a > 0.99),
+            "the avatar is drawn"
+        );
+        for mut renderer in crate::common::renderers() {
+            let tuning = renderer.pipelines.tuning;
+            let (image, stats) = renderer.render(&cloud, &camera, &background).expect("fits");
+            let d = crate::common::diff(&image, &reference);
+            println!(
+                "{side}²: {tuning:?}: {d:?}, {} cut short",
+                stats.tiles_cut_short
+            );
+            assert!(
+                d.max_abs <= 1e-3 && d.max_abs_alpha <= 1e-3,
+                "{side}²: {tuning:?}: {d:?}"
+            );
+            assert_eq!(stats.tiles_cut_short, 0, "{side}²: {tuning:?}");
+        }
+    }
+    // Three copies a tenth of a millimetre apart: every list three times as long.
+    let mut thrice = GaussianCloud::new(cloud.channels);
+    for copy in 0..3 {
+        for i in 0..cloud.len() {
+            let mut p = cloud.positions[i];
+            p[0] += copy as f32 * 1e-4;
+            thrice.push(
+                p,
+                cloud.rotations[i],
+                cloud.scales[i],
+                cloud.opacities[i],
+                cloud.features_of(i),
+            );
+        }
+    }
+    for tuning in crate::common::cpu_tunings() {
+        let mut renderer =
+            guava::render::HeadlessRenderer::with_tuning(crate::common::gpu(), tuning);
+        let (image, stats) = renderer
+            .render(&thrice, &camera(16), &background)
+            .expect("fits");
+        // A written pixel holds its Gaussians' non-negative colours plus T · 0.25, T ≥ 1e-4.
+        let unwritten = image.plane(0).iter().filter(|&&v| v == 0.0).count();
+        println!(
+            "380k in one tile: {tuning:?}: {} cut short, {unwritten} pixels unwritten",
+            stats.tiles_cut_short
+        );
+        assert_eq!(stats.tiles_cut_short, 1, "{tuning:?}");
+        assert_eq!(unwritten, 0, "{tuning:?}");
     }
 }
 

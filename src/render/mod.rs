@@ -135,6 +135,10 @@ pub struct RenderStats {
     pub tile_pairs: u64,
     /// Pairs the frame needed; more than `tile_pairs` only if the buffers could not grow.
     pub tile_pairs_needed: u64,
+    /// Tiles the rasterizer stopped short of the end of their list, at the loop budget of CPU
+    /// adapters (llvmpipe leaves every loop of a shader invocation past 65535 iterations,
+    /// shaders/rasterize.wgsl): their pixels lack the hindmost Gaussians. Zero on GPUs.
+    pub tiles_cut_short: u64,
 }
 
 impl RenderStats {
@@ -161,6 +165,7 @@ impl RenderStats {
             visible: w[5] as u64,
             tile_pairs_needed: w[6] as u64,
             tile_pairs: w[7] as u64,
+            tiles_cut_short: w[8] as u64,
         }
     }
 
@@ -322,6 +327,13 @@ impl HeadlessRenderer {
             queue.submit([encoder.finish()]);
             let stats = self.splatter.read_stats(device, queue);
             if !self.splatter.grow_for(device, &stats) {
+                if stats.tiles_cut_short > 0 {
+                    log::warn!(
+                        "{} tiles drawn without their hindmost Gaussians (the CPU adapter's loop \
+                         budget; fewer Gaussians per tile, e.g. a larger image, avoid it)",
+                        stats.tiles_cut_short
+                    );
+                }
                 return stats;
             }
         }

@@ -340,6 +340,7 @@ impl SplatPipelines {
                 Storage { read_only: true },
                 Binding::OutputTexture(FEATURES_FORMAT),
                 Binding::OutputTexture(AUX_FORMAT),
+                rw(),
             ],
         );
         let rig_layout = bind_group_layout(

@@ -22,6 +22,7 @@ use crate::camera::Camera;
 use crate::gaussians::GaussianCloud;
 use crate::render::mesh::{MeshPass, MeshStyle};
 use crate::render::present::{PresentMode, PresentPass, PresentUniform};
+use crate::render::splatter::STATS_BYTES;
 use crate::render::{GpuAvatar, RasterTuning, RenderStats, SplatPipelines, Splatter, StageTimer};
 use refined::{RefineStage, Showing};
 
@@ -153,8 +154,9 @@ pub struct ViewReport {
     pub refine: RefineReport,
 }
 
-/// The splat counters' size in the readback buffer.
-const STATS_BYTES: u64 = 32;
+/// Where the stage times follow the splat counters in the readback buffer: 8-byte aligned (they
+/// are read as u64).
+const TIMES_AT: u64 = STATS_BYTES.next_multiple_of(8);
 
 /// Which splat input the splatter holds.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -275,7 +277,7 @@ impl ViewRenderer {
             }),
             stats_staging: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("View::stats_staging"),
-                size: STATS_BYTES + timer.as_ref().map_or(0, StageTimer::resolved_size),
+                size: TIMES_AT + timer.as_ref().map_or(0, StageTimer::resolved_size),
                 usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
                 mapped_at_creation: false,
             }),
@@ -472,7 +474,7 @@ impl ViewRenderer {
                 );
                 if let Some(timer) = timer {
                     timer.resolve(&mut encoder);
-                    timer.copy_resolved(&mut encoder, &self.stats_staging, STATS_BYTES);
+                    timer.copy_resolved(&mut encoder, &self.stats_staging, TIMES_AT);
                 }
                 self.stats_state = StatsReadback::Copied { pane };
             }
@@ -614,13 +616,13 @@ impl ViewRenderer {
                     .unwrap_or_default();
                 self.stats_staging.unmap();
                 self.stats_state = StatsReadback::Idle;
-                if bytes.len() < STATS_BYTES as usize {
+                if bytes.len() < TIMES_AT as usize {
                     return None;
                 }
-                let (words, ticks) = bytes.split_at(STATS_BYTES as usize);
+                let (words, ticks) = bytes.split_at(TIMES_AT as usize);
                 let stats = RenderStats::from_words(
                     self.splatter.num_gaussians(),
-                    bytemuck::cast_slice(words),
+                    bytemuck::cast_slice(&words[..STATS_BYTES as usize]),
                 );
                 let stage_ms = self
                     .timer

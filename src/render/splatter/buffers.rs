@@ -274,6 +274,7 @@ impl Splatter {
                     binding: 7,
                     resource: wgpu::BindingResource::TextureView(&aux_view),
                 },
+                entry(8, &self.stats),
             ],
         });
         Bindings {

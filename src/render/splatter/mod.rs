@@ -52,7 +52,8 @@ impl Stage {
     }
 }
 
-const STATS_WORDS: u64 = 8;
+/// The frame's counters (RenderStats::from_words), in bytes.
+pub const STATS_BYTES: u64 = 9 * 4;
 const MIN_GAUSSIANS: u32 = 256;
 const MIN_PAIRS: u32 = 1 << 16;
 
@@ -180,7 +181,7 @@ impl Splatter {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
-            stats: storage(device, "Splat::stats", STATS_WORDS * 4),
+            stats: storage(device, "Splat::stats", STATS_BYTES),
             pair_count: storage(device, "Splat::pair_count", 8),
             depth_count: storage(device, "Splat::depth_count", 4),
             pipes,
@@ -486,7 +487,7 @@ impl Splatter {
     }
 
     pub fn read_stats(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> RenderStats {
-        let bytes = read_buffers(device, queue, &[(&self.stats, STATS_WORDS * 4)]);
+        let bytes = read_buffers(device, queue, &[(&self.stats, STATS_BYTES)]);
         RenderStats::from_words(self.num_gaussians, bytemuck::cast_slice(&bytes[0]))
     }
 

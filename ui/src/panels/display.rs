@@ -217,6 +217,9 @@ impl GuavaApp {
                     row("dropped: NaN/Inf", s.nonfinite.to_string());
                     row("degenerate", s.degenerate.to_string());
                     row("tile pairs", s.tile_pairs.to_string());
+                    if s.tiles_cut_short > 0 {
+                        row("tiles cut short", s.tiles_cut_short.to_string());
+                    }
                 }
             });
     }
