@@ -16,6 +16,7 @@ const STAT_VISIBLE: u32 = 5u;
 const STAT_PAIRS_NEEDED: u32 = 6u;
 const STAT_PAIRS: u32 = 7u;
 const STAT_CUT_SHORT: u32 = 8u;
+const STAT_TOO_WIDE: u32 = 9u;
 
 struct Frame {
     view_from_world: mat4x4<f32>,

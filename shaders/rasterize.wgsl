@@ -24,10 +24,10 @@
 //! llvmpipe counts the iterations of all loops of an invocation (a SIMD row of 8 threads, one
 //! block) together and, past 65535, silently leaves every loop (LP_MAX_TGSI_LOOP_ITERATIONS in
 //! Mesa's gallivm), so a tile with a long list would leave whole blocks unwritten. The walk
-//! takes up to four Gaussians per iteration, and on CPU adapters (SKIP_MISSED = 1) a tile whose
-//! walk would run past LOOP_BUDGET stops there and counts itself in STAT_CUT_SHORT: its pixels
+//! takes up to four Gaussians per iteration, and a tile whose walk would run past LOOP_BUDGET
+//! (CPU adapters; unbounded on GPUs) stops there and counts itself in STAT_CUT_SHORT: its pixels
 //! keep the front-most Gaussians (the list is sorted by depth) and the frame says so.
-//! CHANNELS, PIXELS and SKIP_MISSED are constants prepended by src/render/shader.rs.
+//! CHANNELS, PIXELS, SKIP_MISSED and LOOP_BUDGET are constants prepended by src/render/shader.rs.
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> ranges: array<vec2<u32>>;
@@ -72,11 +72,10 @@ var<workgroup> num_done: atomic<u32>;
 var<workgroup> over_budget: atomic<u32>;
 // Bit 0: every pixel done; bit 1: a block ran out of loop budget.
 var<workgroup> stop_snapshot: u32;
-// Loop iterations a block may run, as counted in `main`, below llvmpipe's 65535: per batch the
-// batch loop, the mask words' loop and blocks_reached's loop over the blocks (which llvmpipe
-// leaves rolled at 16 blocks), per walk step one. The per-pixel and per-word loops unroll: on
+// Loop iterations a block spends per batch, as counted against LOOP_BUDGET in `main`: the batch
+// loop, the mask words' loop and blocks_reached's loop over the blocks (which llvmpipe leaves
+// rolled at 16 blocks); and one per walk step. The per-pixel and per-word loops unroll: on
 // lavapipe a block stored its pixels after 63.4k iterations counted without them.
-const LOOP_BUDGET: u32 = select(0xffffffffu, 60000u, SKIP_MISSED == 1u);
 const BATCH_LOOPS: u32 = 2u + BLOCKS;
 
 struct Batched {

@@ -154,6 +154,16 @@ impl RasterTuning {
         matches!(self, Self::Cpu { .. })
     }
 
+    /// Loop iterations a pass lets one invocation run (`LOOP_BUDGET` in the shaders): under
+    /// llvmpipe's 65,535, past which it silently leaves every loop of the invocation
+    /// (`LP_MAX_TGSI_LOOP_ITERATIONS` in Mesa's gallivm), on CPU adapters; none on GPUs.
+    pub fn loop_budget(self) -> u32 {
+        match self {
+            Self::Cpu { .. } => 60_000,
+            Self::Lockstep(_) => u32::MAX,
+        }
+    }
+
     fn shuffles(self) -> bool {
         matches!(self, Self::Cpu { shuffles: true })
     }
@@ -242,7 +252,8 @@ impl SplatPipelines {
             ],
         );
         let source = shader::with_features(storage, shader::PREPROCESS);
-        let m = shader::module(device, "preprocess.wgsl", &source, &[]);
+        let budget = [("LOOP_BUDGET", tuning.loop_budget())];
+        let m = shader::module(device, "preprocess.wgsl", &source, &budget);
         let preprocess =
             compute_pipeline(device, "Splat::preprocess", &preprocess_layout, &m, "main");
 
@@ -407,6 +418,7 @@ impl SplatPipelines {
                     ("CHANNELS", channels),
                     ("PIXELS", pixels),
                     ("SKIP_MISSED", skip),
+                    ("LOOP_BUDGET", self.tuning.loop_budget()),
                 ];
                 let source = if shuffles {
                     shader::RASTERIZE_SHUFFLES

@@ -34,7 +34,7 @@ type Consts = &'static [(&'static str, u32)];
 /// SKIP_MISSED = 0 stand in for any).
 #[cfg(test)]
 const ALL: &[(&str, &str, Consts)] = &[
-    ("preprocess", PREPROCESS, &[]),
+    ("preprocess", PREPROCESS, &[("LOOP_BUDGET", 60_000)]),
     ("scan", SCAN, &[]),
     ("radix_sort", RADIX_SORT, &[]),
     ("tile_keys", TILE_KEYS, &[]),
@@ -42,12 +42,22 @@ const ALL: &[(&str, &str, Consts)] = &[
     (
         "rasterize",
         RASTERIZE_LOADS,
-        &[("CHANNELS", 3), ("PIXELS", 1), ("SKIP_MISSED", 0)],
+        &[
+            ("CHANNELS", 3),
+            ("PIXELS", 1),
+            ("SKIP_MISSED", 0),
+            ("LOOP_BUDGET", u32::MAX),
+        ],
     ),
     (
         "rasterize_shuffles",
         RASTERIZE_SHUFFLES,
-        &[("CHANNELS", 3), ("PIXELS", 1), ("SKIP_MISSED", 1)],
+        &[
+            ("CHANNELS", 3),
+            ("PIXELS", 1),
+            ("SKIP_MISSED", 1),
+            ("LOOP_BUDGET", 60_000),
+        ],
     ),
     ("rig", RIG, &[]),
     ("present", PRESENT, &[]),
@@ -132,17 +142,32 @@ mod tests {
         // The rasterizer at the channel counts, layouts, tunings and feature storages we use and
         // the bounds we support.
         for s in [FeatureStorage::F32, FeatureStorage::F16] {
-            validated("preprocess", shader::PREPROCESS, &[], s);
+            validated(
+                "preprocess",
+                shader::PREPROCESS,
+                &[("LOOP_BUDGET", 60_000)],
+                s,
+            );
             for c in [1, 3, 32, 64] {
                 for p in [1, 2, 4, 8] {
                     for skip in [0, 1] {
-                        let consts = [("CHANNELS", c), ("PIXELS", p), ("SKIP_MISSED", skip)];
+                        let consts = [
+                            ("CHANNELS", c),
+                            ("PIXELS", p),
+                            ("SKIP_MISSED", skip),
+                            ("LOOP_BUDGET", 60_000),
+                        ];
                         let label = format!("rasterize {s:?} {consts:?}");
                         validated(&label, shader::RASTERIZE_LOADS, &consts, s);
                     }
                 }
                 for p in [1, 4] {
-                    let consts = [("CHANNELS", c), ("PIXELS", p), ("SKIP_MISSED", 1)];
+                    let consts = [
+                        ("CHANNELS", c),
+                        ("PIXELS", p),
+                        ("SKIP_MISSED", 1),
+                        ("LOOP_BUDGET", 60_000),
+                    ];
                     let label = format!("rasterize with shuffles {s:?} {consts:?}");
                     validated(&label, shader::RASTERIZE_SHUFFLES, &consts, s);
                 }
