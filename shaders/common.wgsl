@@ -16,7 +16,6 @@ const STAT_VISIBLE: u32 = 5u;
 const STAT_PAIRS_NEEDED: u32 = 6u;
 const STAT_PAIRS: u32 = 7u;
 const STAT_CUT_SHORT: u32 = 8u;
-const STAT_TOO_WIDE: u32 = 9u;
 
 struct Frame {
     view_from_world: mat4x4<f32>,
@@ -76,16 +75,56 @@ fn reach_limit(opacity: f32) -> f32 {
     return 2.0 * log(255.0 * opacity) + 1e-3;
 }
 
-// Whether a splat at `xy` (pixel coordinates) with conic (A, B, C) and reach_limit `q_limit` can
-// reach α ≥ 1/255 at any pixel of `tile`.
-fn tile_reached(xy: vec2<f32>, conic_opacity: vec4<f32>, q_limit: f32, tile: vec2<u32>) -> bool {
-    let lo = vec2<f32>(tile * TILE_SIZE);
-    return rect_reached(xy, conic_opacity, q_limit, lo, lo + f32(TILE_SIZE - 1u));
+// Pixels of slack on every side of a row's span (row_span) for f32 rounding: a tile more, rarely.
+const SPAN_SLACK: f32 = 0.015625;
+
+// The tiles [x, y) of tile row `ty`, within columns [first, end), in which a splat at `xy`
+// (pixel coordinates) with conic (A, B, C) and reach_limit `q_limit` can reach α ≥ 1/255: those
+// whose pixel positions meet the ellipse q ≤ q_limit, as rect_reached decides per rectangle, for
+// a whole row at once. The ellipse's points in the row's band of y span one interval of x: at a
+// fixed dy = v its dx = u runs over (−Bv ± √(AL − det·v²)) / A, whose ends are concave and convex
+// in v, so the band's extremes are at the ellipse's own (u = ±√(CL/det), v = ∓Bu/C) clamped into
+// the band. Preprocess counts a splat's tiles and tile keys lists them row by row with it: one
+// loop iteration per row, not per tile, because llvmpipe leaves every loop of an invocation after
+// 65,535 iterations in all (see rasterize.wgsl), and a splat filling a 4096² image spans 65,536
+// tiles (walked tile by tile it got 65,025: test a_splat_filling_the_image_is_in_every_tile).
+fn row_span(xy: vec2<f32>, conic_opacity: vec4<f32>, q_limit: f32, ty: u32, first: u32, end: u32) -> vec2<u32> {
+    let a = conic_opacity.x;
+    let b = conic_opacity.y;
+    let c = conic_opacity.z;
+    // A needle's a·c and b² nearly cancel: the product's rounding error taken back (Kahan).
+    let bb = b * b;
+    let det = fma(a, c, -bb) - fma(b, b, -bb);
+    let none = vec2<u32>(first, first);
+    if !(det > 0.0 && a > 0.0 && c > 0.0 && q_limit > 0.0) {
+        return none;
+    }
+    // dy over the row's pixel positions, within the ellipse's own extent.
+    let y_lo = f32(ty * TILE_SIZE);
+    let v_max = sqrt(a * q_limit / det);
+    let v0 = max(xy.y - (y_lo + f32(TILE_SIZE - 1u)) - SPAN_SLACK, -v_max);
+    let v1 = min(xy.y - y_lo + SPAN_SLACK, v_max);
+    if v0 > v1 {
+        return none;
+    }
+    let u_star = sqrt(c * q_limit / det);
+    let v_hi = clamp(-b * u_star / c, v0, v1);
+    let v_lo = clamp(b * u_star / c, v0, v1);
+    let u_hi = (-b * v_hi + sqrt(max(a * q_limit - det * v_hi * v_hi, 0.0))) / a;
+    let u_lo = (-b * v_lo - sqrt(max(a * q_limit - det * v_lo * v_lo, 0.0))) / a;
+    // Pixel x = xy.x − u.
+    let x_lo = xy.x - u_hi - SPAN_SLACK;
+    let x_hi = xy.x - u_lo + SPAN_SLACK;
+    // Tiles whose positions [16t, 16t + 15] meet [x_lo, x_hi]; i32() saturates.
+    let t0 = clamp(i32(ceil((x_lo - f32(TILE_SIZE - 1u)) / f32(TILE_SIZE))), i32(first), i32(end));
+    let t1 = clamp(i32(floor(x_hi / f32(TILE_SIZE))) + 1, t0, i32(end));
+    return vec2<u32>(u32(t0), u32(t1));
 }
 
-// The same for the pixels with positions in [lo, hi]: the least q over the rectangle of pixel
-// positions (its centre inside → 0, else on one of the four edges, each a clamped 1D minimum) is
-// at most that over its pixels.
+// Whether a splat at `xy` with conic (A, B, C) and reach_limit `q_limit` can reach α ≥ 1/255 at
+// a pixel with position in [lo, hi]: the least q over the rectangle of positions (its centre
+// inside → 0, else on one of the four edges, each a clamped 1D minimum) is at most that over its
+// pixels.
 fn rect_reached(xy: vec2<f32>, conic_opacity: vec4<f32>, q_limit: f32, lo: vec2<f32>, hi: vec2<f32>) -> bool {
     if all(xy >= lo) && all(xy <= hi) {
         return true;

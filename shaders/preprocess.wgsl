@@ -116,20 +116,14 @@ fn main(
         atomicAdd(&stats[STAT_OUTSIDE], 1u);
         return;
     }
-    // Its tiles are walked row by row here and in tile keys: past LOOP_BUDGET iterations (a
-    // splat filling a 4096² image on llvmpipe) the rest are silently left out, so say so.
-    if (rmax.y - rmin.y) * (rmax.x - rmin.x + 1u) > LOOP_BUDGET {
-        atomicAdd(&stats[STAT_TOO_WIDE], 1u);
-    }
     let conic_opacity = vec4<f32>(conic, g.opacity);
     // The reference lists every tile of the 3σ rectangle; only those the splat can reach matter
     // (it still counts as visible when it reaches none, as in the reference).
     let q_limit = reach_limit(g.opacity);
     var area = 0u;
     for (var ty = rmin.y; ty < rmax.y; ty++) {
-        for (var tx = rmin.x; tx < rmax.x; tx++) {
-            area += u32(tile_reached(xy, conic_opacity, q_limit, vec2<u32>(tx, ty)));
-        }
+        let span = row_span(xy, conic_opacity, q_limit, ty, rmin.x, rmax.x);
+        area += span.y - span.x;
     }
 
     var p: Projected;

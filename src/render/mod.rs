@@ -139,9 +139,6 @@ pub struct RenderStats {
     /// adapters (llvmpipe leaves every loop of a shader invocation past 65535 iterations,
     /// shaders/rasterize.wgsl): their pixels lack the hindmost Gaussians. Zero on GPUs.
     pub tiles_cut_short: u64,
-    /// Splats spanning more tiles than a CPU adapter's loop budget lets preprocess and tile keys
-    /// walk (a splat filling a 4096² image): some of their tiles are left out. Zero on GPUs.
-    pub splats_too_wide: u64,
 }
 
 impl RenderStats {
@@ -169,7 +166,6 @@ impl RenderStats {
             tile_pairs_needed: w[6] as u64,
             tile_pairs: w[7] as u64,
             tiles_cut_short: w[8] as u64,
-            splats_too_wide: w[9] as u64,
         }
     }
 
@@ -336,13 +332,6 @@ impl HeadlessRenderer {
                         "{} tiles drawn without their hindmost Gaussians (the CPU adapter's loop \
                          budget; fewer Gaussians per tile, e.g. a larger image, avoid it)",
                         stats.tiles_cut_short
-                    );
-                }
-                if stats.splats_too_wide > 0 {
-                    log::warn!(
-                        "{} splats drawn in only some of their tiles (the CPU adapter's loop \
-                         budget; a smaller image avoids it)",
-                        stats.splats_too_wide
                     );
                 }
                 return stats;

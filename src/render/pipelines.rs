@@ -154,8 +154,8 @@ impl RasterTuning {
         matches!(self, Self::Cpu { .. })
     }
 
-    /// Loop iterations a pass lets one invocation run (`LOOP_BUDGET` in the shaders): under
-    /// llvmpipe's 65,535, past which it silently leaves every loop of the invocation
+    /// Loop iterations the rasterizer lets one block run (`LOOP_BUDGET`, shaders/rasterize.wgsl):
+    /// under llvmpipe's 65,535, past which it silently leaves every loop of the invocation
     /// (`LP_MAX_TGSI_LOOP_ITERATIONS` in Mesa's gallivm), on CPU adapters; none on GPUs.
     pub fn loop_budget(self) -> u32 {
         match self {
@@ -252,8 +252,7 @@ impl SplatPipelines {
             ],
         );
         let source = shader::with_features(storage, shader::PREPROCESS);
-        let budget = [("LOOP_BUDGET", tuning.loop_budget())];
-        let m = shader::module(device, "preprocess.wgsl", &source, &budget);
+        let m = shader::module(device, "preprocess.wgsl", &source, &[]);
         let preprocess =
             compute_pipeline(device, "Splat::preprocess", &preprocess_layout, &m, "main");
 

@@ -34,7 +34,7 @@ type Consts = &'static [(&'static str, u32)];
 /// SKIP_MISSED = 0 stand in for any).
 #[cfg(test)]
 const ALL: &[(&str, &str, Consts)] = &[
-    ("preprocess", PREPROCESS, &[("LOOP_BUDGET", 60_000)]),
+    ("preprocess", PREPROCESS, &[]),
     ("scan", SCAN, &[]),
     ("radix_sort", RADIX_SORT, &[]),
     ("tile_keys", TILE_KEYS, &[]),
@@ -142,12 +142,7 @@ mod tests {
         // The rasterizer at the channel counts, layouts, tunings and feature storages we use and
         // the bounds we support.
         for s in [FeatureStorage::F32, FeatureStorage::F16] {
-            validated(
-                "preprocess",
-                shader::PREPROCESS,
-                &[("LOOP_BUDGET", 60_000)],
-                s,
-            );
+            validated("preprocess", shader::PREPROCESS, &[], s);
             for c in [1, 3, 32, 64] {
                 for p in [1, 2, 4, 8] {
                     for skip in [0, 1] {

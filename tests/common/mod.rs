@@ -49,7 +49,7 @@ pub fn cpu_tunings() -> Vec<RasterTuning> {
 
 /// The pass's counters against the f64 reference's: every culling count equal; tile pairs no
 /// more than the reference's, which lists every tile of a splat's 3σ rectangle where the pass
-/// lists only the tiles the splat can reach at α ≥ 1/255 (`tile_reached` in common.wgsl; the
+/// lists only the tiles the splat can reach at α ≥ 1/255 (`row_span` in common.wgsl; the
 /// image comparisons check that leaving the others out changes no pixel).
 pub fn assert_stats_match(name: &str, gpu: &RenderStats, reference: &RenderStats) {
     let counts = |s: &RenderStats| RenderStats {

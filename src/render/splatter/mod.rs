@@ -53,7 +53,7 @@ impl Stage {
 }
 
 /// The frame's counters (RenderStats::from_words), in bytes.
-pub const STATS_BYTES: u64 = 10 * 4;
+pub const STATS_BYTES: u64 = 9 * 4;
 const MIN_GAUSSIANS: u32 = 256;
 const MIN_PAIRS: u32 = 1 << 16;
 

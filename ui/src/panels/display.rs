@@ -220,9 +220,6 @@ impl GuavaApp {
                     if s.tiles_cut_short > 0 {
                         row("tiles cut short", s.tiles_cut_short.to_string());
                     }
-                    if s.splats_too_wide > 0 {
-                        row("splats too wide", s.splats_too_wide.to_string());
-                    }
                 }
             });
     }
