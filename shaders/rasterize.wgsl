@@ -181,6 +181,21 @@ fn shade(px: ptr<function, Pixels>, j: u32, lid: u32, lane: u32, origin: vec2<u3
     }
 }
 
+// The walk's steps: the Gaussian of the lowest set bit of a block's mask word (whose bit 0 is
+// batched Gaussian `first`), clearing it; or batched Gaussian j if the batch holds it.
+fn shade_next_bit(px: ptr<function, Pixels>, bits: ptr<function, u32>, first: u32, lid: u32, lane: u32, origin: vec2<u32>) {
+    if *bits != 0u {
+        shade(px, first + firstTrailingBit(*bits), lid, lane, origin);
+        *bits &= *bits - 1u;
+    }
+}
+
+fn shade_below(px: ptr<function, Pixels>, j: u32, n: u32, lid: u32, lane: u32, origin: vec2<u32>) {
+    if j < n {
+        shade(px, j, lid, lane, origin);
+    }
+}
+
 @compute @workgroup_size(THREADS)
 fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -267,38 +282,20 @@ fn main(
                     bits = block_masks[block * MASK_WORDS + mask_word];
                     mask_word++;
                 }
-                let first = (mask_word - 1u) * 32u;
                 // A block's lanes share `bits`, so each step is taken by all of them or none.
-                if bits != 0u {
-                    shade(&px, first + firstTrailingBit(bits), lid, lane, origin);
-                    bits &= bits - 1u;
-                }
-                if bits != 0u {
-                    shade(&px, first + firstTrailingBit(bits), lid, lane, origin);
-                    bits &= bits - 1u;
-                }
-                if bits != 0u {
-                    shade(&px, first + firstTrailingBit(bits), lid, lane, origin);
-                    bits &= bits - 1u;
-                }
-                if bits != 0u {
-                    shade(&px, first + firstTrailingBit(bits), lid, lane, origin);
-                    bits &= bits - 1u;
-                }
+                let first = (mask_word - 1u) * 32u;
+                shade_next_bit(&px, &bits, first, lid, lane, origin);
+                shade_next_bit(&px, &bits, first, lid, lane, origin);
+                shade_next_bit(&px, &bits, first, lid, lane, origin);
+                shade_next_bit(&px, &bits, first, lid, lane, origin);
             } else {
                 if next >= n {
                     break;
                 }
-                shade(&px, next, lid, lane, origin);
-                if next + 1u < n {
-                    shade(&px, next + 1u, lid, lane, origin);
-                }
-                if next + 2u < n {
-                    shade(&px, next + 2u, lid, lane, origin);
-                }
-                if next + 3u < n {
-                    shade(&px, next + 3u, lid, lane, origin);
-                }
+                shade_below(&px, next, n, lid, lane, origin);
+                shade_below(&px, next + 1u, n, lid, lane, origin);
+                shade_below(&px, next + 2u, n, lid, lane, origin);
+                shade_below(&px, next + 3u, n, lid, lane, origin);
                 next += 4u;
             }
         }
