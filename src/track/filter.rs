@@ -26,12 +26,15 @@ impl OneEuroSettings {
         beta: 80.0,
         d_cutoff: 1.0,
     };
-    /// Joint rotations, speed in radians per second: at rest 0.5 Hz, 20 Hz at a waving
-    /// forearm's 4 rad/s. Chosen on `guava bench track`'s synthetic wave, where the arms'
-    /// joints were (mean px off, Σ° change a frame; truth 8.9°): unfiltered 5.6 px, 51°; this
-    /// 6.5 px, 29°; 1 Hz and 0.3 (the first try) 9.5 px, 22°, lagging the wave by 18 px.
+    /// Joint rotations, speed in radians per second: at rest 1 Hz, 21 Hz at a waving
+    /// forearm's 4 rad/s. On `guava bench track`'s synthetic wave the arms' joints were (mean px
+    /// off, Σ° change a frame; truth 8.9°) unfiltered 4.3 px, 67°; at rest 0.5 Hz 6.0 px, 30°;
+    /// 1 Hz 5.8 px, 33°; 2 Hz 5.5 px, 36°; 1 Hz with β 0.3 (the first try) lagged the wave by
+    /// 18 px. The shipped clip's self-reenactment (`guava eval --video`) gained from less lag
+    /// too: 0.5 Hz 16.99 dB, 1 Hz 17.07, 2 Hz 17.11, its joints changing 3.85°, 4.11° and 4.43°
+    /// a frame; 1 Hz is the middle of that trade.
     pub const ROTATIONS: Self = Self {
-        min_cutoff: 0.5,
+        min_cutoff: 1.0,
         beta: 5.0,
         d_cutoff: 1.0,
     };
