@@ -394,7 +394,9 @@ fn hair_stands_off_the_back_of_the_head() {
 /// where those jump (the jaw's outline to the neck's) into black cracks through which the
 /// background showed, the self-reenactment clip's worst artefact. Measured: 74 holes before
 /// (pixels of background with the avatar within 8 pixels on all four sides: a crack beside the
-/// jaw), 0 after.
+/// jaw), 0 after. It also guards hair's lag behind the head (`extras::HAIR_LAG`): the same lag
+/// everywhere opened the hair from the head's side (15 holes at 0.2); growing from none at the
+/// scalp, 0.
 #[test]
 fn long_hair_beside_the_neck_stays_whole_when_the_head_turns() {
     let body = BodyModel::default_body().expect("default body");
@@ -474,7 +476,7 @@ fn long_hair_beside_the_neck_stays_whole_when_the_head_turns() {
         "{} Gaussians beyond the body; {holes} holes with the head turned",
         outcome.report.extras
     );
-    assert!(holes < 20, "{holes} holes through the hair");
+    assert!(holes < 10, "{holes} holes through the hair");
 }
 
 /// A landscape video frame's square is padded above and below it, and a segmentation joins the

@@ -11,9 +11,9 @@
 //! the torso around it (never the face, which expressions move, nor the arms), averaged over a
 //! window of neighbouring hair pixels, each joint carried by the vertex nearest the Gaussian
 //! that moves with it alone, and its depth averaged over the same window; a share of it
-//! ([`HAIR_LAG`]) hangs from the upper torso, as hanging hair lags a turning head. Per pixel, by the body
-//! pixel nearest each, long hair tore into cracks along the rows where that jumped from the jaw
-//! to the neck. (Cloth keeps its nearest vertices: joints carried by vertices centimetres apart
+//! ([`HAIR_LAG`]), growing from none at the scalp, hangs from the upper torso, as hanging hair
+//! lags a turning head. Per pixel, by the body pixel nearest each, long hair tore into cracks
+//! along the rows where that jumped from the jaw to the neck. (Cloth keeps its nearest vertices: joints carried by vertices centimetres apart
 //! move a Gaussian a little differently from the joints' own blend, which is what a glTF export
 //! can express, and the clothing beside the arms would be off by centimetres there.) What lies
 //! past the body's reach (a held object) rides the body surface seen beside it, as one piece:
@@ -68,12 +68,19 @@ const RIGID: f32 = 0.9;
 /// torso, and stayed behind when her head moved.
 const HAIR_REACH: f32 = 2.0 * REACH;
 /// The share of hair's skinning taken from the upper torso's joint instead of the body around
-/// it: hair hangs, and lags the head's turns and tilts. On the shipped clip (self-reenactment
-/// from frame 0, `--every 8`) 0 → 0.15 → 0.2 → 0.3 gave 16.73 → 16.99 → 17.06 → 17.14 dB (from
-/// frame 240: 17.95 → 18.08 at 0.15), but skinned discs cannot lag without tearing: with the
-/// head turned 20° and nodded 11°, `fidelity::long_hair_beside_the_neck_stays_whole_when_the_
-/// head_turns` counts 0, 15 and 21 holes at 0.15, 0.2 and 0.3. Tuned on the one real clip.
-const HAIR_LAG: f32 = 0.15;
+/// it, for hair [`HAIR_HANGS_AT`] or more from the head, and less nearer it (a smoothstep from
+/// none at the head): hair hangs, and lags the head's turns and tilts, but it grows from the
+/// scalp. The same share everywhere opened the hair from the head's side when the head turned:
+/// with the head turned 20° and nodded 11°, `fidelity::long_hair_beside_the_neck_stays_whole_
+/// when_the_head_turns` counted 0, 15 and 21 holes at 0.15, 0.2 and 0.3 (the shipped clip's
+/// self-reenactment from frame 0, `--every 8`: 16.99, 17.06 and 17.14 dB with them, 16.73
+/// without, tracked with the joints' filter at 0.5 Hz; at 1 Hz 0.15 scores 17.07). Growing with
+/// the distance, none: 0.45 over 3 cm 17.25 dB, 0.6 over 3 cm 17.28 (0.6 over 2 cm: 9 holes;
+/// 0.6 over 5 cm: 17.20 dB). 0.45, as the glTF export's linear blend skinning follows the
+/// chest's share, carried by a chest vertex, less closely (`export_gltf`: 99th percentile 1.48
+/// cm off the viewer's at 0.45, 1.58 at 0.6; bound 1.5). Tuned on the one real clip.
+const HAIR_LAG: f32 = 0.45;
+const HAIR_HANGS_AT: f32 = 0.03;
 /// Cloth this far below the shoulder joint and between the arm and the torso follows the torso.
 const BELOW_SHOULDER: f32 = 0.05;
 
@@ -136,8 +143,10 @@ pub fn extras(
         };
         let hair = anchors
             .within(point, HAIR_REACH)
-            .iter()
-            .any(|&(_, k)| anchors.head[k as usize]);
+            .into_iter()
+            .filter(|&(_, k)| anchors.head[k as usize])
+            .map(|(d, _)| d)
+            .min_by(f32::total_cmp);
         found.push(Uncovered {
             pixel: i,
             nearest: q,
@@ -156,7 +165,7 @@ pub fn extras(
     // portrait's suit showed dark shards under her raised arm, and scored 0.6 dB less.)
     let unproject =
         |i: usize, z: f32| camera.unproject((i % size) as f32 + 0.5, (i / size) as f32 + 0.5, z);
-    let is_hair = |u: &Uncovered| u.hair && !u.held;
+    let is_hair = |u: &Uncovered| u.hair.is_some() && !u.held;
     let mut inside = vec![false; size * size];
     for u in found.iter().filter(|u| is_hair(u)) {
         inside[u.pixel] = true;
@@ -169,11 +178,16 @@ pub fn extras(
         .map(|u| middle.max(u.depth))
         .collect();
     let depths = window.means(&depths);
+    let lags = found
+        .iter()
+        .filter_map(|u| is_hair(u).then_some(u.hair).flatten())
+        .map(hair_lag);
     let weights: Vec<Vec<(u16, f32)>> = window
         .pixels
         .iter()
         .zip(&depths)
-        .map(|(&i, &z)| anchors.hair_joints(unproject(i, z)))
+        .zip(lags)
+        .map(|((&i, &z), lag)| anchors.hair_joints(unproject(i, z), lag))
         .collect();
     let mut hair = depths.into_iter().zip(window.mean_weights(&weights));
     let mut placed: Vec<(usize, Vec3, Skinning, bool, Extra)> = Vec::new();
@@ -231,6 +245,13 @@ pub fn extras(
         push(&mut out, point, skinning, disc, &gaussian, vertices, posed);
     }
     out
+}
+
+/// The share of hair's skinning moved to the upper torso's joint for hair `to_head` metres from
+/// the head ([`HAIR_LAG`]).
+fn hair_lag(to_head: f32) -> f32 {
+    let t = (to_head / HAIR_HANGS_AT).clamp(0.0, 1.0);
+    HAIR_LAG * t * t * (3.0 - 2.0 * t)
 }
 
 /// The vertex of the least distance among `(distance, vertex)` pairs.
@@ -347,7 +368,8 @@ struct Uncovered {
     depth: f32,
     skinning: Skinning,
     held: bool,
-    hair: bool,
+    /// Hair: how far the nearest head vertex is (metres, within [`HAIR_REACH`]).
+    hair: Option<f32>,
 }
 
 /// What an extra Gaussian is besides where: its scale (metres), opacity and features.
@@ -651,18 +673,18 @@ impl<'a> Anchors<'a> {
 
     /// Joint weights for hair at `point`: the skinning weights of the body vertices hair may
     /// hang from near it (the skull, the neck, the torso; not the face, which expressions move,
-    /// nor the arms), averaged with the anchors' distance falloff, with [`HAIR_LAG`] of it moved
+    /// nor the arms), averaged with the anchors' distance falloff, with `lag` of it moved
     /// to the upper torso's joint.
-    fn hair_joints(&self, point: Vec3) -> Vec<(u16, f32)> {
+    fn hair_joints(&self, point: Vec3, lag: f32) -> Vec<(u16, f32)> {
         let near = self.reached(point, |k| self.hangs_from[k as usize]);
         let total: f32 = near.iter().map(|&(d, _)| falloff(d)).sum();
         let mut joints = self.joints_of(
             near.into_iter()
-                .map(|(d, k)| (k, (1.0 - HAIR_LAG) * falloff(d) / total)),
+                .map(|(d, k)| (k, (1.0 - lag) * falloff(d) / total)),
         );
         match joints.iter_mut().find(|(j, _)| *j == self.spine) {
-            Some((_, w)) => *w += HAIR_LAG,
-            None => joints.push((self.spine, HAIR_LAG)),
+            Some((_, w)) => *w += lag,
+            None => joints.push((self.spine, lag)),
         }
         joints
     }
