@@ -182,6 +182,14 @@ enum Command {
         /// paper's, from the lpips package and torchvision's AlexNet weights).
         #[arg(long)]
         lpips: Option<PathBuf>,
+        /// Score the image the avatar's refiner makes of the splat pass's (what the viewer shows
+        /// once the view settles; GUAVA's paper scores its refiner's output): the default
+        /// refiner for default-mode avatars, GUAVA's from --guava-models for GUAVA-mode ones.
+        #[arg(long)]
+        refine: bool,
+        /// With --refine: GUAVA's networks folder, whose refiner a GUAVA-mode avatar is refined by.
+        #[arg(long, requires = "refine")]
+        guava_models: Option<PathBuf>,
         #[command(flatten)]
         keypoints: photo::KeypointArgs,
     },
@@ -312,6 +320,8 @@ fn run(cli: Cli) -> Result<()> {
             ehm,
             out,
             lpips,
+            refine,
+            guava_models,
             keypoints,
         } => {
             let every = every as usize;
@@ -330,8 +340,12 @@ fn run(cli: Cli) -> Result<()> {
                 &target,
                 tracking.as_deref(),
                 ehm.as_deref(),
-                out.as_deref(),
-                lpips.as_deref(),
+                &photo::Scoring {
+                    out: out.as_deref(),
+                    lpips: lpips.as_deref(),
+                    refine,
+                    guava_models: guava_models.as_deref(),
+                },
                 &keypoints,
             )
         }

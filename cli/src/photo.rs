@@ -234,6 +234,18 @@ pub enum Target {
     },
 }
 
+/// What `guava eval` writes and measures besides the scores.
+pub struct Scoring<'a> {
+    /// Where photo | render | difference go.
+    pub out: Option<&'a Path>,
+    /// An LPIPS model.
+    pub lpips: Option<&'a Path>,
+    /// Score the avatar's refiner's output instead of the splat pass's (GUAVA mode's from
+    /// `guava_models`).
+    pub refine: bool,
+    pub guava_models: Option<&'a Path>,
+}
+
 /// Compares an avatar, re-rendered from its photo's view (or a video's tracked views), with the
 /// photo (or the frames); prints the metrics, and with `out` writes photo | render | difference.
 pub fn eval(
@@ -241,8 +253,7 @@ pub fn eval(
     target: &Target,
     tracking: Option<&Path>,
     ehm: Option<&Path>,
-    out: Option<&Path>,
-    lpips: Option<&Path>,
+    scoring: &Scoring,
     keypoints: &KeypointArgs,
 ) -> Result<()> {
     let avatar_file = match avatar {
@@ -251,7 +262,7 @@ pub fn eval(
         }
         None => None,
     };
-    let mut lpips = match lpips {
+    let mut lpips = match scoring.lpips {
         Some(path) => Some(guava::eval::lpips::Lpips::load(
             guava::onnx::OnnxRuntime::load()?,
             path,
@@ -261,8 +272,10 @@ pub fn eval(
     let mut run = Eval {
         target,
         tracking,
-        out,
+        out: scoring.out,
         lpips: &mut lpips,
+        refine: scoring.refine.then_some(scoring.guava_models),
+        refiner: None,
         pipeline: keypoints.pipeline(),
         renderer: guava::render::HeadlessRenderer::new(guava::gpu::GpuContext::headless()?),
     };
@@ -286,6 +299,10 @@ struct Eval<'a> {
     tracking: Option<&'a Path>,
     out: Option<&'a Path>,
     lpips: &'a mut Option<guava::eval::lpips::Lpips>,
+    /// Whether to refine, and GUAVA's networks folder for a GUAVA-mode avatar's refiner.
+    refine: Option<Option<&'a Path>>,
+    /// The avatar's refiner, loaded once its kind is known.
+    refiner: Option<guava::refine::Refiner>,
     pipeline: guava::pipeline::Pipeline,
     renderer: guava::render::HeadlessRenderer,
 }
@@ -297,6 +314,21 @@ impl Eval<'_> {
         body: &impl guava::body::Posable,
     ) -> Result<()> {
         avatar.check_body(body).map_err(anyhow::Error::msg)?;
+        if let Some(networks) = self.refine {
+            let path =
+                guava::refine::refiner_for(avatar.kind, networks).map_err(anyhow::Error::msg)?;
+            let refiner = guava::refine::Refiner::load_on(
+                guava::refine::RefinerOn::Auto,
+                &self.renderer.gpu,
+                &path,
+            )?;
+            eprintln!(
+                "  scoring the refined image: {} on {}",
+                refiner.description,
+                refiner.engine_name()
+            );
+            self.refiner = Some(refiner);
+        }
         let image = match self.target {
             Target::Photo(image) => image,
             Target::Frames { dir, every } => {
@@ -337,8 +369,14 @@ impl Eval<'_> {
         let photo = self
             .pipeline
             .masked_photo(Photo::File(image), &view, &mut |_| true)?;
-        let (metrics, rendered) =
-            guava::eval::evaluate(&mut self.renderer, &avatar, body, Some(&view), &photo)?;
+        let (metrics, rendered) = guava::eval::evaluate_refined(
+            &mut self.renderer,
+            &avatar,
+            body,
+            Some(&view),
+            &photo,
+            self.refiner.as_mut(),
+        )?;
         let d = match self.lpips {
             Some(model) => guava::eval::perceptual(model, &rendered, &photo)?,
             None => f64::NAN,
@@ -465,9 +503,15 @@ impl Eval<'_> {
                 &mut |_| true,
             )?;
             // Where the frame's square leaves the frame (padding) nothing is compared.
-            let (m, rendered) =
-                guava::eval::evaluate(&mut self.renderer, avatar, body, Some(&view), &photo)
-                    .with_context(|| label.clone())?;
+            let (m, rendered) = guava::eval::evaluate_refined(
+                &mut self.renderer,
+                avatar,
+                body,
+                Some(&view),
+                &photo,
+                self.refiner.as_mut(),
+            )
+            .with_context(|| label.clone())?;
             let d = match self.lpips.as_mut() {
                 Some(model) => guava::eval::perceptual(model, &rendered, &photo)
                     .with_context(|| label.clone())?,

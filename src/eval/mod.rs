@@ -13,6 +13,7 @@ pub use metrics::Metrics;
 use crate::avatar::Avatar;
 use crate::body::{Posable, PosedBody};
 use crate::photo::SourceImage;
+use crate::refine::Refiner;
 use crate::render::{AvatarRenderError, GpuAvatar, HeadlessRenderer, SplatImage};
 use crate::tracking::SourceView;
 
@@ -33,6 +34,8 @@ pub enum EvalError {
     Pose(#[from] crate::body::PoseError),
     #[error(transparent)]
     Lpips(#[from] lpips::LpipsError),
+    #[error(transparent)]
+    Refine(#[from] crate::refine::RefineError),
 }
 
 /// `avatar` on `body` as `view` sees it, rendered through the frame path at the view's size on
@@ -138,6 +141,19 @@ pub fn evaluate(
     view: Option<&SourceView>,
     photo: &SourceImage,
 ) -> Result<(Metrics, SplatImage), EvalError> {
+    evaluate_refined(renderer, avatar, body, view, photo, None)
+}
+
+/// [`evaluate`], the render refined by `refiner` first where one is given (as the viewer shows a
+/// settled view), the whole frame, before the padding is cleared.
+pub fn evaluate_refined(
+    renderer: &mut HeadlessRenderer,
+    avatar: &Avatar,
+    body: &impl Posable,
+    view: Option<&SourceView>,
+    photo: &SourceImage,
+    refiner: Option<&mut Refiner>,
+) -> Result<(Metrics, SplatImage), EvalError> {
     let mut view = view
         .or(avatar.source_view.as_ref())
         .ok_or(EvalError::NoSourceView)?
@@ -147,6 +163,9 @@ pub fn evaluate(
         .camera
         .scaled(photo.size as f32 / view.camera.width.max(1) as f32);
     let mut rendered = render_view(renderer, avatar, body, &view)?;
+    if let Some(refiner) = refiner {
+        rendered = refiner.refine(&rendered)?;
+    }
     let (size, n) = (photo.size as usize, rendered.alpha.len());
     for i in (0..n).filter(|&i| !photo.shown.contains((i % size) as i64, (i / size) as i64)) {
         rendered.alpha[i] = 0.0;
