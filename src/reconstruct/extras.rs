@@ -13,11 +13,12 @@
 //! that moves with it alone, and its depth averaged over the same window; a share of it
 //! ([`HAIR_LAG`]), growing from none at the scalp, hangs from the upper torso, as hanging hair
 //! lags a turning head. Per pixel, by the body pixel nearest each, long hair tore into cracks
-//! along the rows where that jumped from the jaw to the neck. (Cloth keeps its nearest vertices: joints carried by vertices centimetres apart
-//! move a Gaussian a little differently from the joints' own blend, which is what a glTF export
-//! can express, and the clothing beside the arms would be off by centimetres there.) What lies
-//! past the body's reach (a held object) rides the body surface seen beside it, as one piece:
-//! each connected part takes the skinning of its pixel nearest the body.
+//! along the rows where that jumped from the jaw to the neck. (Cloth keeps its nearest
+//! vertices: joints carried by vertices centimetres apart move a Gaussian a little differently
+//! from the joints' own blend, which is what a glTF export can express, and the clothing beside
+//! the arms would be off by centimetres there.) What lies past the body's reach (a held object)
+//! rides the body surface seen beside it, as one piece: each connected part takes the skinning
+//! of its pixel nearest the body.
 //!
 //! Each is a disc facing the source camera, under a pixel wide, and as thick along the view as
 //! half its distance from that surface, up to [`MAX_DEPTH`] (thicker, a jacket's edge around the
