@@ -117,6 +117,11 @@ pub enum RasterTuning {
     Cpu { shuffles: bool },
 }
 
+/// The rasterizer's loop budget on CPU adapters: under llvmpipe's 65,535 iterations, past which
+/// it silently leaves every loop of the invocation (`LP_MAX_TGSI_LOOP_ITERATIONS` in Mesa's
+/// gallivm).
+pub const CPU_LOOP_BUDGET: u32 = 60_000;
+
 impl RasterTuning {
     /// The layout for a device: lockstep on GPUs; on CPU adapters skipping, with shuffles where
     /// the device has subgroups of exactly a block's 8 lanes.
@@ -155,11 +160,10 @@ impl RasterTuning {
     }
 
     /// Loop iterations the rasterizer lets one block run (`LOOP_BUDGET`, shaders/rasterize.wgsl):
-    /// under llvmpipe's 65,535, past which it silently leaves every loop of the invocation
-    /// (`LP_MAX_TGSI_LOOP_ITERATIONS` in Mesa's gallivm), on CPU adapters; none on GPUs.
+    /// [`CPU_LOOP_BUDGET`] on CPU adapters; none on GPUs.
     pub fn loop_budget(self) -> u32 {
         match self {
-            Self::Cpu { .. } => 60_000,
+            Self::Cpu { .. } => CPU_LOOP_BUDGET,
             Self::Lockstep(_) => u32::MAX,
         }
     }

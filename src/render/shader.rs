@@ -56,7 +56,7 @@ const ALL: &[(&str, &str, Consts)] = &[
             ("CHANNELS", 3),
             ("PIXELS", 1),
             ("SKIP_MISSED", 1),
-            ("LOOP_BUDGET", 60_000),
+            ("LOOP_BUDGET", crate::render::pipelines::CPU_LOOP_BUDGET),
         ],
     ),
     ("rig", RIG, &[]),
@@ -150,7 +150,7 @@ mod tests {
                             ("CHANNELS", c),
                             ("PIXELS", p),
                             ("SKIP_MISSED", skip),
-                            ("LOOP_BUDGET", 60_000),
+                            ("LOOP_BUDGET", crate::render::pipelines::CPU_LOOP_BUDGET),
                         ];
                         let label = format!("rasterize {s:?} {consts:?}");
                         validated(&label, shader::RASTERIZE_LOADS, &consts, s);
@@ -161,7 +161,7 @@ mod tests {
                         ("CHANNELS", c),
                         ("PIXELS", p),
                         ("SKIP_MISSED", 1),
-                        ("LOOP_BUDGET", 60_000),
+                        ("LOOP_BUDGET", crate::render::pipelines::CPU_LOOP_BUDGET),
                     ];
                     let label = format!("rasterize with shuffles {s:?} {consts:?}");
                     validated(&label, shader::RASTERIZE_SHUFFLES, &consts, s);
