@@ -26,6 +26,7 @@ mod hand;
 mod head_and_shoulders;
 mod lm;
 mod problem;
+mod reach;
 mod report;
 mod silhouette;
 mod unknowns;
@@ -33,6 +34,7 @@ mod unknowns;
 pub use face::{FACE_FEATURES, FACE_FIT_POINTS, FaceEmbedding, embed_face};
 pub use gaze::{eye_joint, pupil};
 pub use hand::{BodyPoint, hand_targets};
+pub use reach::Arm;
 pub use report::{FaceFitReport, FitReport, GazeFitReport, HandFitReport};
 pub use silhouette::{SilhouetteReport, fit_silhouette};
 
@@ -48,6 +50,7 @@ use crate::body::{BodyModel, EhmModel, HEAD_SIZE, Landmark, PointPoser, TargetGr
 use crate::camera::GUAVA_INVTANFOV;
 use crate::keypoints::{
     Detections, FACE_EYE_CORNERS, FaceLandmarker, FaceLandmarks, HandLandmarks, Iris, Keypoint,
+    PoseKeypoints, Side,
 };
 use crate::tracking::SourceView;
 
@@ -227,14 +230,7 @@ pub fn body_keypoints<'a>(
     side: u32,
 ) -> Result<(std::borrow::Cow<'a, [Keypoint]>, Option<String>), FitError> {
     let presence = detections.pose.presence;
-    let no_body = if presence.is_nan() || presence < MIN_PRESENCE {
-        Some(format!("the pose model's presence is {presence:.2}"))
-    } else {
-        detections
-            .face
-            .as_ref()
-            .and_then(|face| head_and_shoulders::contradicts(&detections.pose.keypoints, face))
-    };
+    let no_body = no_body(&detections.pose, detections.face.as_ref());
     let from_face = || {
         detections.face.as_ref().and_then(|face| {
             head_and_shoulders::keypoints_from_face(
@@ -268,6 +264,17 @@ pub fn body_keypoints<'a>(
     };
     let points = from_face().ok_or(FitError::NoPerson { presence })?;
     Ok((points.into(), Some(why)))
+}
+
+/// Why the pose model's points are not the body of the person whose face is `face`, if they are
+/// not: it sees no person, or its points contradict the face ([`head_and_shoulders`]); the fit
+/// then takes the head and shoulders from the face.
+pub fn no_body(pose: &PoseKeypoints, face: Option<&FaceLandmarks>) -> Option<String> {
+    let presence = pose.presence;
+    if presence.is_nan() || presence < MIN_PRESENCE {
+        return Some(format!("the pose model's presence is {presence:.2}"));
+    }
+    face.and_then(|face| head_and_shoulders::contradicts(&pose.keypoints, face))
 }
 
 /// [`fit_detections`] for GUAVA's body: fits EHM's linear form ([`EhmModel::linearised`]) and
@@ -541,6 +548,16 @@ fn fit_from(
             .chain(&pupils),
     );
 
+    // Arms no body keypoint shows whose hand was found are the hand stage's to place
+    // ([`reach`]): the body stage's priors alone would lower them from where the last frame's
+    // hands held them.
+    let reaching = input
+        .hands
+        .iter()
+        .enumerate()
+        .filter(|(_, h)| unseen_arms[usize::from(h.side == Side::Right)])
+        .map(|(k, h)| Ok((k, reach::Arm::of(body, h.side)?)))
+        .collect::<Result<Vec<_>, FitError>>()?;
     let mut unknowns: Vec<(Unknown, f64)> = root_and_camera().collect();
     for name in FITTED_JOINTS {
         // A leg turns only where the keypoint at its far end was seen: otherwise the hip points
@@ -557,6 +574,9 @@ fn fit_from(
             continue;
         }
         let j = joint(name)?;
+        if reaching.iter().any(|(_, arm)| arm.turns(j)) {
+            continue;
+        }
         unknowns.extend(joint_unknowns(body, j));
     }
     // The shape is the person's: fitted on a photo (or a video's first frame) and kept.
@@ -754,7 +774,7 @@ fn fit_from(
         let start = stage.observations.len();
         let mut tip = body.landmarks.len() + face_points.len();
         let (mut unknowns, mut temporal) = (Vec::new(), Vec::new());
-        for (h, targets) in input.hands.iter().zip(&hand_targets) {
+        for (k, (h, targets)) in input.hands.iter().zip(&hand_targets).enumerate() {
             for (t, &p) in targets.iter().zip(&h.points) {
                 let target = match t {
                     BodyPoint::Joint(j) => Target::Joint(*j),
@@ -768,13 +788,29 @@ fn fit_from(
             }
             let palm = h.points[0].distance(h.points[9]).max(1.0) as f64;
             let first = unknowns.len();
+            // An arm the body stage left to this hand turns at the shoulder too, and is placed
+            // afresh where its wrist is far from the hand's (the hand came into view, or the
+            // last frame lost it): no pull to where it was then.
+            let mut placed = false;
+            if let Some((_, arm)) = reaching.iter().find(|(i, _)| *i == k) {
+                let camera = camera_for(result.camera, side);
+                if let Some(pose) = arm.place(body, &result.pose, &camera, h.points[0], palm as f32)
+                {
+                    (result.pose, placed) = (pose, true);
+                }
+                unknowns
+                    .extend((0..3).map(|k| (Unknown::Joint(arm.shoulder, k), PRIOR_PX_PER_RAD)));
+            }
             for j in hand::hand_joints(body, h.side)? {
                 let prior = FINGER_PRIOR_PER_PALM * palm;
                 unknowns.extend((0..3).map(|k| (Unknown::Joint(j, k), prior)));
             }
-            temporal.extend(pull(&unknowns[first..], &|_| {
+            let pull_weight = if placed {
+                0.0
+            } else {
                 TEMPORAL_FINGER_PER_PALM * palm
-            }));
+            };
+            temporal.extend(pull(&unknowns[first..], &|_| pull_weight));
         }
         stage.temporal = temporal;
         stage.unknowns = unknowns;

@@ -274,13 +274,14 @@ impl Landmarkers {
             pose.keypoints = found.body();
             hands = found.hands();
             person = found.person();
-        } else {
+        }
+        let mut face = self.face(source, &pose)?;
+        if self.wholebody.is_none() {
             for side in [Side::Left, Side::Right] {
                 hands.extend(self.hand.detect(source, &pose, side)?);
             }
-            self.hands_from_palms(source, &pose, &mut hands)?;
+            self.hands_from_palms(source, &pose, face.as_ref(), &mut hands)?;
         }
-        let mut face = self.face(source, &pose)?;
         let irises = match &mut face {
             Some(face) => self.iris.detect(source, face)?,
             None => Vec::new(),
@@ -336,33 +337,60 @@ impl Landmarkers {
 
     /// Hands the pose model did not place (a wrist it was unsure of, a hand far from where it
     /// put it), found from the palm detector: each palm no found hand's crop covers is taken as
-    /// the hand of the side whose pose wrist is nearer, if that side has none yet and its arm
-    /// reaches the palm ([`reaches`]; a palm out of both arms' reach is someone else's).
+    /// the hand of a side that has none yet ([`palm_side`]).
     pub fn hands_from_palms(
         &mut self,
         source: &SourceImage,
         pose: &PoseKeypoints,
+        face: Option<&FaceLandmarks>,
         hands: &mut Vec<HandLandmarks>,
     ) -> Result<(), OnnxError> {
-        let wrist = |side| pose.point(if side == Side::Left { 15 } else { 16 }).0;
         for palm in self.palm.detect(source)? {
             if hands.iter().any(|h| h.roi.covers(palm.knuckle)) {
                 continue;
             }
-            let side = [Side::Left, Side::Right]
-                .into_iter()
-                .filter(|&s| hands.iter().all(|h| h.side != s) && reaches(pose, s, palm.wrist))
-                .min_by(|&a, &b| {
-                    let d = |s| wrist(s).distance(palm.wrist);
-                    d(a).total_cmp(&d(b))
-                });
-            if let Some(side) = side {
+            let free = |s: Side| hands.iter().all(|h| h.side != s);
+            if let Some(side) = palm_side(pose, face, palm.wrist).filter(|&s| free(s)) {
                 hands.extend(self.hand.detect_in(source, palm.roi, side)?);
             }
         }
         Ok(())
     }
 }
+
+/// Whose hand a palm with its wrist at `wrist` is. Where the pose model sees the person: the
+/// side whose pose wrist is nearer among the arms that reach it ([`reaches`]; a palm out of
+/// both arms' reach is someone else's). Where it does not ([`crate::fit::no_body`]: a face
+/// close up, on which it finds no body or misreads one) but the face mesh does: the side of the
+/// face's midline the wrist is on (an arm comes up from its own shoulder, below the frame), for
+/// a wrist within [`FACE_REACH`] of the face.
+fn palm_side(pose: &PoseKeypoints, face: Option<&FaceLandmarks>, wrist: Vec2) -> Option<Side> {
+    let sides = [Side::Left, Side::Right];
+    if crate::fit::no_body(pose, face).is_none() {
+        let pose_wrist = |side| pose.point(if side == Side::Left { 15 } else { 16 }).0;
+        let d = |s| pose_wrist(s).distance(wrist);
+        return sides
+            .into_iter()
+            .filter(|&s| reaches(pose, s, wrist))
+            .min_by(|&a, &b| d(a).total_cmp(&d(b)));
+    }
+    let face = face?;
+    let roi = Roi::face_from_landmarks(&face.points);
+    let across = face.points[FACE_EYE_CORNERS.1] - face.points[FACE_EYE_CORNERS.0];
+    let off = wrist - roi.centre;
+    (off.length() <= FACE_REACH * roi.side).then(|| {
+        // The eye corners run from the person's right to their left.
+        if off.dot(across) > 0.0 {
+            Side::Left
+        } else {
+            Side::Right
+        }
+    })
+}
+
+/// A palm may lie this many face crops ([`Roi::face_from_landmarks`]) from the face's centre
+/// and still be the hand of the person whose face it is, when the pose model sees no body.
+const FACE_REACH: f32 = 1.5;
 
 /// A palm's wrist may lie this many arm lengths from the shoulder and still be that arm's hand.
 const REACH: f32 = 1.3;

@@ -29,7 +29,7 @@ pub struct ModelRuns {
     pub person_search: bool,
     /// The face was looked for afresh (from the pose's face points, then the face detector).
     pub face_search: bool,
-    /// Hands looked for afresh from the pose's wrists.
+    /// Hands looked for afresh from the pose's wrists, and searches by the palm detector.
     pub hand_searches: usize,
     /// Time in the pose, face, hand and iris models (each with its crops' sampling and any
     /// search), in [`MODEL_PARTS`] order.
@@ -50,6 +50,8 @@ pub struct LandmarkTracker {
     /// Frames since the person, and each hand, were last searched for.
     since_search: usize,
     since_hand_search: [usize; 2],
+    /// Frames since the palm detector last looked for a hand the pose model places no wrist for.
+    since_palm_search: usize,
 }
 
 impl LandmarkTracker {
@@ -110,14 +112,16 @@ impl LandmarkTracker {
         self.face_roi = face.as_ref().map(|f| Roi::face_from_landmarks(&f.points));
         lap(&mut runs, 1);
         let mut hands: Vec<HandLandmarks> = Vec::new();
+        let mut unplaced = false;
         for (k, side) in [Side::Left, Side::Right].into_iter().enumerate() {
             let tracked = match self.hand_rois[k] {
                 Some(roi) => models.hand.detect_passes(source, roi, side, 1)?,
                 None => None,
             };
             self.since_hand_search[k] += 1;
-            let search = Roi::hand_from_pose(&pose, side)
-                .filter(|_| self.since_hand_search[k] >= HAND_SEARCH_EVERY);
+            let from_pose = Roi::hand_from_pose(&pose, side);
+            unplaced |= tracked.is_none() && from_pose.is_none();
+            let search = from_pose.filter(|_| self.since_hand_search[k] >= HAND_SEARCH_EVERY);
             let hand = match (tracked, search) {
                 (Some(hand), _) => Some(hand),
                 (None, Some(roi)) => {
@@ -127,8 +131,21 @@ impl LandmarkTracker {
                 }
                 (None, None) => None,
             };
-            self.hand_rois[k] = hand.as_ref().map(|h| Roi::hand_from_landmarks(&h.points));
             hands.extend(hand);
+        }
+        // A hand the pose model places no wrist for (a hand over a face close up, where it
+        // sees no body) is looked for by the palm detector, as a photo's is.
+        self.since_palm_search += 1;
+        if unplaced && self.since_palm_search >= HAND_SEARCH_EVERY {
+            runs.hand_searches += 1;
+            self.since_palm_search = 0;
+            models.hands_from_palms(source, &pose, face.as_ref(), &mut hands)?;
+        }
+        for (k, side) in [Side::Left, Side::Right].into_iter().enumerate() {
+            self.hand_rois[k] = hands
+                .iter()
+                .find(|h| h.side == side)
+                .map(|h| Roi::hand_from_landmarks(&h.points));
         }
         lap(&mut runs, 2);
         let irises = match &mut face {
