@@ -49,12 +49,14 @@ struct SkinnedGaussian {
 }
 
 struct PosedVertex {
+    // xyz, and in w whether the vertex is drawn (1) or hidden (0).
     position: vec4<f32>,
     // The linear part of the blended skinning transform, columns.
     skin: mat3x3<f32>,
 }
 
-// A posed triangle: its corners (σ in v0.w) and its frame as a unit quaternion.
+// A posed triangle: its corners (σ in v0.w, whether it is drawn in v1.w) and its frame as a
+// unit quaternion.
 struct TriangleFrame {
     v0: vec4<f32>,
     v1: vec4<f32>,
@@ -121,9 +123,12 @@ fn frames_main(
     // past the end work on the last item and store the same values it does.
     let id = flat_id(wid, nwg, lid, 256u);
     let f = min(id, params.triangle_count - 1u);
-    let v0 = posed[triangles[3u * f]].position.xyz;
-    let v1 = posed[triangles[3u * f + 1u]].position.xyz;
-    let v2 = posed[triangles[3u * f + 2u]].position.xyz;
+    let p0 = posed[triangles[3u * f]].position;
+    let p1 = posed[triangles[3u * f + 1u]].position;
+    let p2 = posed[triangles[3u * f + 2u]].position;
+    let v0 = p0.xyz;
+    let v1 = p1.xyz;
+    let v2 = p2.xyz;
     let e0 = v1 - v0;
     let a0 = e0 / safe_length(e0);
     let n = cross(a0, v2 - v0);
@@ -131,9 +136,11 @@ fn frames_main(
     let m = cross(a1, a0);
     let a2 = -m / safe_length(m);
     let sigma = (safe_length(e0) + abs(dot(a2, v2 - v0))) / 2.0;
+    // A triangle is drawn where all its corners are (a hand out of the photo's view is not).
+    let seen = min(p0.w, min(p1.w, p2.w));
     var out: TriangleFrame;
     out.v0 = vec4<f32>(v0, sigma);
-    out.v1 = vec4<f32>(v1, 0.0);
+    out.v1 = vec4<f32>(v1, seen);
     out.v2 = vec4<f32>(v2, 0.0);
     out.rot = quat_from_matrix(mat3x3<f32>(a0, a1, a2));
     frames[f] = out;
@@ -153,7 +160,7 @@ fn template_main(
     g.pos = v.position.xyz;
     g.rot = quat_normalize(quat_mul(quat_from_matrix(v.skin), t.rot));
     g.scale = t.scale;
-    g.opacity = t.opacity;
+    g.opacity = t.opacity * v.position.w;
     g._pad = 0.0;
     gaussians[i] = g;
 }
@@ -174,7 +181,7 @@ fn uv_main(
     g.pos = sigma * quat_rotate(f.rot, u.offset) + anchor;
     g.rot = quat_mul(f.rot, u.rot);
     g.scale = u.scale * sigma;
-    g.opacity = u.opacity;
+    g.opacity = u.opacity * f.v1.w;
     g._pad = 0.0;
     gaussians[params.template_count + params.skinned_count + j] = g;
 }

@@ -172,6 +172,7 @@ fn the_view_refines_its_own_frame_as_the_offscreen_path_does() {
                 avatar: avatar.clone(),
                 triangles: Arc::new(body.triangles.clone()),
                 weld: body.weld().map(|w| Arc::new(w.to_vec())),
+                hands: None,
             },
             pose: PoseRef {
                 id: 1,

@@ -5,10 +5,11 @@
 
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use guava::avatar::{Avatar, Rig};
+use guava::avatar::{Avatar, HandsInView, Rig};
 use guava::body::{AnyBody, BodyModel, BodyPose, EhmModel, Posable, PosedBody};
 use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
@@ -249,11 +250,18 @@ pub fn run(args: RenderArgs) -> Result<()> {
         (true, _) => CameraPath::Tracked,
         (false, path) => path,
     };
+    // The hands the photo did not show are drawn where it looked, as the viewer draws them.
+    let rig = match &subject {
+        Subject::Avatar(posed) => {
+            Rig::with_hands(HandsInView::new(&posed.avatar, &posed.body).map(Arc::new))
+        }
+        Subject::Splats(_) => Rig::default(),
+    };
     let mut frames = Frames {
         subject,
         name,
         path,
-        rig: Rig::default(),
+        rig,
         renderer,
         refiner,
         framed_on: None,

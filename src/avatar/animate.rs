@@ -6,9 +6,11 @@
 //!   = Σ w_k S_k its vertices' blended skinning (linear parts), renormalised;
 //! - UV Gaussian on triangle f: μ = σ_f·R_f·Δμ + Σ b_k v_k, r = q(R_f) ⊗ r_local, s = σ_f·s_local.
 
+use std::sync::Arc;
+
 use glam::{Mat3A, Vec3};
 
-use super::{Avatar, Dressing};
+use super::{Avatar, Dressing, HandsInView};
 use crate::body::{Posable, PosedBody, TriangleFrame, triangle_frames};
 use crate::gaussians::GaussianCloud;
 
@@ -25,14 +27,26 @@ pub struct BodyMismatch {
     pub triangles: usize,
 }
 
-/// Scratch space for [`Rig::animate`], reused across frames (no allocation after the first).
+/// Scratch space for [`Rig::animate`], reused across frames (no allocation after the first),
+/// and the avatar's hands the photo did not show, when they are drawn only in its view.
 #[derive(Clone, Debug, Default)]
 pub struct Rig {
     frames: Vec<TriangleFrame>,
     dressing: Dressing,
+    hands: Option<Arc<HandsInView>>,
+    visibility: Vec<f32>,
 }
 
 impl Rig {
+    /// A rig that draws the hands the photo did not show only where it looked (`None`: as the
+    /// avatar has them).
+    pub fn with_hands(hands: Option<Arc<HandsInView>>) -> Self {
+        Self {
+            hands,
+            ..Self::default()
+        }
+    }
+
     /// The avatar's Gaussians on `body` posed as `posed` (dressed in the avatar's clothing
     /// first), into `out`; not those on parts its photo did not show ([`Avatar::outside`]).
     pub fn animate(
@@ -75,7 +89,13 @@ impl Rig {
                 .push(normalize(quat_mul(quat_from_matrix(skin.matrix3), r)));
         }
         out.scales.extend_from_slice(&t.scales);
-        out.opacities.extend_from_slice(&t.opacities);
+        self.visibility.clear();
+        if let Some(hands) = &self.hands {
+            hands.visibility(posed, &mut self.visibility);
+        }
+        let seen = |v: usize| self.visibility.get(v).copied().unwrap_or(1.0);
+        out.opacities
+            .extend(t.opacities.iter().enumerate().map(|(v, &o)| o * seen(v)));
         out.features.extend_from_slice(&t.features);
 
         let k = &avatar.skinned;
@@ -116,7 +136,15 @@ impl Rig {
             out.scales.push(s.map(|x| x * frame.scale));
         }
         out.opacities
-            .extend_from_slice(&uv.local.opacities[..shown]);
+            .extend(
+                uv.local.opacities[..shown]
+                    .iter()
+                    .zip(&uv.triangles)
+                    .map(|(&o, &f)| {
+                        let corners = triangles[f as usize].map(|k| seen(k as usize));
+                        o * corners[0].min(corners[1]).min(corners[2])
+                    }),
+            );
         out.features
             .extend_from_slice(&uv.local.features[..shown * avatar.channels]);
         Ok(())

@@ -13,11 +13,13 @@
 mod animate;
 mod dress;
 pub mod file;
+mod hands_in_view;
 mod preview;
 
 pub use animate::{BodyMismatch, Rig, blend, quat_from_matrix, quat_mul};
 pub use dress::Dressing;
 pub use file::{AVATAR_FORMAT, AvatarFileError};
+pub use hands_in_view::{HandsInView, SEEN_MARGIN, seen_near};
 
 use std::collections::BTreeMap;
 

@@ -157,4 +157,11 @@ impl Posable for AnyBody {
             Self::Ehm(m) => m.weld(),
         }
     }
+
+    fn part_of(&self, v: usize) -> Option<&str> {
+        match self {
+            Self::Template(m) => m.part_of(v),
+            Self::Ehm(m) => Posable::part_of(m.as_ref(), v),
+        }
+    }
 }

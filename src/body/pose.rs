@@ -58,6 +58,11 @@ pub trait Posable {
     fn weld(&self) -> Option<&[u32]> {
         None
     }
+    /// The body part vertex `v` belongs to (`hand.L`, `head`, …); `None` on a body without part
+    /// labels.
+    fn part_of(&self, _v: usize) -> Option<&str> {
+        None
+    }
 }
 
 impl BodyPose {
@@ -239,5 +244,9 @@ impl Posable for BodyModel {
 
     fn weld(&self) -> Option<&[u32]> {
         Some(&self.weld)
+    }
+
+    fn part_of(&self, v: usize) -> Option<&str> {
+        BodyModel::part_of(self, v)
     }
 }

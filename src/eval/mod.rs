@@ -10,7 +10,7 @@ pub mod subjects;
 
 pub use metrics::Metrics;
 
-use crate::avatar::Avatar;
+use crate::avatar::{Avatar, HandsInView};
 use crate::body::{Posable, PosedBody};
 use crate::photo::SourceImage;
 use crate::refine::Refiner;
@@ -55,6 +55,7 @@ pub fn render_view(
         body.triangles(),
         body.weld(),
     );
+    gpu.set_hands(HandsInView::new(avatar, body).map(std::sync::Arc::new));
     let background = vec![0.0; avatar.channels];
     Ok(renderer
         .render_avatar(&mut gpu, &posed, &view.camera, &background)?

@@ -22,7 +22,7 @@ use glam::{Mat4, Vec3};
 use serde_json::{Value, json};
 
 use super::glb::{ARRAY_BUFFER, Glb, Kind};
-use crate::avatar::{Avatar, Rig, quat_from_matrix};
+use crate::avatar::{Avatar, HandsInView, Rig, quat_from_matrix};
 use crate::body::{BodyModel, BodyPose, MAX_INFLUENCES, MorphTarget, PosedBody, TargetGroup};
 use crate::gaussians::GaussianCloud;
 use crate::tracking::{Retarget, Tracking};
@@ -206,9 +206,12 @@ pub fn export(
     });
     step(0.4)?;
 
-    // The splats at the bind pose, skinned by their anchors' weights.
+    // The splats at the bind pose, skinned by their anchors' weights. Hands the photo did not
+    // show are transparent there, as the viewer draws them below the bust; glTF cannot switch
+    // them on where a pose raises them into the photo's view.
     let mut cloud = GaussianCloud::new(avatar.channels);
-    Rig::default().animate(avatar, &bind, body, &mut cloud)?;
+    let hands = HandsInView::new(avatar, body).map(std::sync::Arc::new);
+    Rig::with_hands(hands).animate(avatar, &bind, body, &mut cloud)?;
     let anchors = splat_anchors(avatar, body);
     let splat_influences = splat_influences(&anchors, &influences);
     let splat_morphs: Vec<Value> = targets

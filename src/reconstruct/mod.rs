@@ -25,7 +25,7 @@ pub mod uv_map;
 use std::collections::BTreeMap;
 use std::time::Duration;
 
-use crate::avatar::Avatar;
+use crate::avatar::{Avatar, seen_near};
 use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, TargetGroup};
 use crate::photo::{PhotoError, Shown, SourceImage};
 use crate::progress::{Cancelled, Stage, StageClock};
@@ -224,56 +224,44 @@ pub fn reconstruct_default(
         );
     }
     report.extras = avatar.skinned.len();
-    report.left_out = leave_out(
-        &mut avatar,
-        &posed.vertices,
-        &body.triangles,
-        camera,
-        photo.shown,
-    );
+    report.left_out = leave_out(&mut avatar, body, &posed.vertices, camera, photo.shown);
     report.timings = clock.finish();
     Ok((avatar, report))
 }
-
-/// The body just past the photo's edge is kept (turned views see a little of it, coloured from
-/// what the photo shows next to it): this share of the photo's side beyond each edge.
-pub const LEAVE_OUT_MARGIN: f32 = 0.25;
 
 /// The grey that parts of the body the photo did not show are drawn in, when they are.
 pub const NEUTRAL_FILL: f32 = 0.5;
 
 /// Leaves out of `avatar` what its photo did not show: the UV Gaussians on triangles none of
-/// whose corners (posed at `vertices`) `camera` sees inside the photo or within
-/// [`LEAVE_OUT_MARGIN`] of its edge move, greyed, to the end of the UV set (the avatar's
-/// `outside` block, drawn only on request), and the template Gaussians on such vertices go
-/// transparent. Returns how many UV Gaussians were left out.
+/// whose corners (posed at `vertices`) `camera` sees inside the photo or near its edge
+/// ([`seen_near`]) move, greyed, to the end of the UV set (the avatar's `outside` block, drawn
+/// only on request), and the template Gaussians on such vertices go transparent. The hands
+/// stay, in the colour their part was given: a hand raised into the photo's view is drawn
+/// there ([`crate::avatar::HandsInView`]). Returns how many UV Gaussians were left out.
 fn leave_out(
     avatar: &mut Avatar,
+    body: &BodyModel,
     vertices: &[glam::Vec3],
-    triangles: &[[u32; 3]],
     camera: &crate::camera::Camera,
     shown: Shown,
 ) -> usize {
-    let [left, top, right, bottom] =
-        [shown.left, shown.top, shown.right, shown.bottom].map(|v| v as f32);
-    let (mx, my) = (
-        LEAVE_OUT_MARGIN * camera.width as f32,
-        LEAVE_OUT_MARGIN * camera.height as f32,
-    );
+    let bounds = [shown.left, shown.top, shown.right, shown.bottom].map(|v| v as f32);
     let seen: Vec<bool> = vertices
         .iter()
-        .map(|&v| {
-            let p = camera.project(v);
-            p.z > 0.0
-                && (left - mx..right + mx).contains(&p.x)
-                && (top - my..bottom + my).contains(&p.y)
+        .enumerate()
+        .map(|(i, &v)| {
+            body.part_of(i).is_some_and(|p| p.starts_with("hand.")) || seen_near(camera, bounds, v)
         })
         .collect();
     let outside: Vec<bool> = avatar
         .uv
         .triangles
         .iter()
-        .map(|&t| triangles[t as usize].iter().all(|&v| !seen[v as usize]))
+        .map(|&t| {
+            body.triangles[t as usize]
+                .iter()
+                .all(|&v| !seen[v as usize])
+        })
         .collect();
     let c = avatar.channels;
     let order: Vec<usize> = (0..outside.len())

@@ -102,7 +102,8 @@ pub struct SkinnedGaussian {
 }
 const _: () = assert!(size_of::<SkinnedGaussian>() == 80);
 
-/// A posed vertex: its position and the linear part of its skinning transform (columns, each
+/// A posed vertex: its position (w: 1 where it is drawn, 0 on a hand out of the photo's view,
+/// [`crate::avatar::HandsInView`]) and the linear part of its skinning transform (columns, each
 /// padded to four floats as WGSL's `mat3x3<f32>` is).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]

@@ -13,7 +13,7 @@ use super::layout::{
 use super::pipelines::{SplatPipelines, dispatch_1d};
 use super::scan::entry;
 use super::{SplatError, Splatter};
-use crate::avatar::{Avatar, BodyMismatch, Dressing};
+use crate::avatar::{Avatar, BodyMismatch, Dressing, HandsInView};
 use crate::body::PosedBody;
 
 /// An avatar's constant data on the GPU, and its posed vertices.
@@ -50,6 +50,10 @@ pub struct GpuAvatar {
     /// were made for.
     bound: Option<((u64, usize), wgpu::BindGroup)>,
     scratch: Vec<PosedVertex>,
+    /// The hands the photo did not show, drawn only where it looked: each posed vertex carries
+    /// its visibility (1 or 0) in its position's w, by which the rig scales opacities.
+    hands: Option<Arc<HandsInView>>,
+    visibility: Vec<f32>,
 }
 
 fn constant(
@@ -191,6 +195,8 @@ impl GpuAvatar {
             pipes,
             bound: None,
             scratch: Vec::new(),
+            hands: None,
+            visibility: Vec::new(),
         }
     }
 
@@ -287,6 +293,12 @@ impl GpuAvatar {
         self.bound = None;
     }
 
+    /// Draws the hands the photo did not show only where it looked (`None`: as the avatar has
+    /// them), from the next [`Self::set_pose`] on.
+    pub fn set_hands(&mut self, hands: Option<Arc<HandsInView>>) {
+        self.hands = hands;
+    }
+
     /// Uploads the posed body (its vertices, dressed in the avatar's clothing, and its skinning
     /// rotations) for the next [`Self::encode`].
     pub fn set_pose(&mut self, queue: &wgpu::Queue, posed: &PosedBody) -> Result<(), BodyMismatch> {
@@ -306,15 +318,25 @@ impl GpuAvatar {
             &self.mesh,
             self.weld.as_deref(),
         );
+        self.visibility.clear();
+        if let Some(hands) = &self.hands {
+            hands.visibility(posed, &mut self.visibility);
+        }
+        let seen = |i: usize| self.visibility.get(i).copied().unwrap_or(1.0);
         self.scratch.clear();
-        self.scratch
-            .extend(vertices.iter().zip(&posed.skin).map(|(v, skin)| {
-                let m = skin.matrix3;
-                PosedVertex {
-                    position: v.extend(1.0).to_array(),
-                    skin: [m.x_axis, m.y_axis, m.z_axis].map(|c| c.extend(0.0).to_array()),
-                }
-            }));
+        self.scratch.extend(
+            vertices
+                .iter()
+                .zip(&posed.skin)
+                .enumerate()
+                .map(|(i, (v, skin))| {
+                    let m = skin.matrix3;
+                    PosedVertex {
+                        position: v.extend(seen(i)).to_array(),
+                        skin: [m.x_axis, m.y_axis, m.z_axis].map(|c| c.extend(0.0).to_array()),
+                    }
+                }),
+        );
         queue.write_buffer(&self.posed, 0, bytemuck::cast_slice(&self.scratch));
         Ok(())
     }

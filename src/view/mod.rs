@@ -16,7 +16,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::Vec3;
 
-use crate::avatar::Avatar;
+use crate::avatar::{Avatar, HandsInView};
 use crate::body::PosedBody;
 use crate::camera::Camera;
 use crate::gaussians::GaussianCloud;
@@ -79,6 +79,8 @@ pub struct AvatarRef {
     pub avatar: Arc<Avatar>,
     pub triangles: Arc<Vec<[u32; 3]>>,
     pub weld: Option<Arc<Vec<u32>>>,
+    /// Its hands the photo did not show, drawn only where the photo looked.
+    pub hands: Option<Arc<HandsInView>>,
 }
 
 /// A posed body and the id of that pose: each id is rigged once.
@@ -350,15 +352,17 @@ impl ViewRenderer {
                 };
                 if self.avatar.as_ref().is_none_or(|a| a.id != avatar.id) {
                     report.avatar_uploads += 1;
+                    let mut full = GpuAvatar::new(
+                        device,
+                        self.pipelines.clone(),
+                        &avatar.avatar,
+                        &avatar.triangles,
+                        avatar.weld.as_deref().map(Vec::as_slice),
+                    );
+                    full.set_hands(avatar.hands.clone());
                     self.avatar = Some(ShownAvatar {
                         id: avatar.id,
-                        full: GpuAvatar::new(
-                            device,
-                            self.pipelines.clone(),
-                            &avatar.avatar,
-                            &avatar.triangles,
-                            avatar.weld.as_deref().map(Vec::as_slice),
-                        ),
+                        full,
                         preview: None,
                     });
                 }
@@ -372,13 +376,15 @@ impl ViewRenderer {
                     true => shown.preview.get_or_insert_with(|| {
                         report.avatar_uploads += 1;
                         let preview = avatar.avatar.preview();
-                        GpuAvatar::new(
+                        let mut gpu = GpuAvatar::new(
                             device,
                             self.pipelines.clone(),
                             &preview,
                             &avatar.triangles,
                             avatar.weld.as_deref().map(Vec::as_slice),
-                        )
+                        );
+                        gpu.set_hands(avatar.hands.clone());
+                        gpu
                     }),
                     false => &mut shown.full,
                 };

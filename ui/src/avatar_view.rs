@@ -2,10 +2,10 @@
 //! what its panel shows of the photo it was made from.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use glam::Vec2;
-use guava::avatar::Avatar;
+use guava::avatar::{Avatar, HandsInView};
 use guava::body::{Landmark, Posable, PosedBody};
 use guava::fit::{BodyPoint, FitReport};
 use guava::keypoints::Keypoint;
@@ -32,6 +32,8 @@ pub struct AvatarState {
     pub show_outside: bool,
     /// How it compares with its photo, when it was made here (or why it could not be).
     pub fidelity: Option<Result<Fidelity, String>>,
+    /// Its hands the photo did not show, found on the body it is first shown on.
+    hands: OnceLock<Option<Arc<HandsInView>>>,
 }
 
 impl AvatarState {
@@ -62,6 +64,7 @@ impl AvatarState {
             source_camera,
             show_outside: false,
             fidelity,
+            hands: OnceLock::new(),
         }
     }
 
@@ -72,6 +75,10 @@ impl AvatarState {
             avatar: self.avatar.clone(),
             triangles: body.triangles(),
             weld: body.weld(),
+            hands: self
+                .hands
+                .get_or_init(|| HandsInView::new(&self.avatar, &*body.model).map(Arc::new))
+                .clone(),
         }
     }
 }

@@ -9,6 +9,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
+use guava::avatar::HandsInView;
 use guava::body::{BodyPose, Posable, PosedBody};
 use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
@@ -294,7 +295,8 @@ fn posed_ply(out: &Path, doc: &mut Document) -> Result<String, String> {
     };
     let posed = body.posed();
     let mut cloud = GaussianCloud::new(avatar.avatar.channels);
-    guava::avatar::Rig::default()
+    let hands = HandsInView::new(&avatar.avatar, body.model.as_ref()).map(Arc::new);
+    guava::avatar::Rig::with_hands(hands)
         .animate(
             &avatar.avatar,
             &posed.posed,

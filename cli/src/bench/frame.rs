@@ -18,7 +18,7 @@ use std::time::Instant;
 
 use super::body::cpu_name;
 use super::median;
-use guava::avatar::Rig;
+use guava::avatar::{HandsInView, Rig};
 use guava::body::{BodyModel, BodyPose, PosedBody};
 use guava::camera::{Camera, orbit_y_up};
 use guava::gaussians::GaussianCloud;
@@ -86,7 +86,9 @@ pub fn frame(args: &FrameBenchArgs) -> anyhow::Result<()> {
     );
     let mut posed = PosedBody::default();
     let mut cloud = GaussianCloud::new(avatar.channels);
-    let mut rig = Rig::default();
+    // The hands the photo did not show, as the viewer decides them each frame.
+    let hands = HandsInView::new(&avatar, &body).map(Arc::new);
+    let mut rig = Rig::with_hands(hands.clone());
     let mut gpu_avatar = GpuAvatar::new(
         &renderer.gpu.device,
         renderer.pipelines.clone(),
@@ -94,6 +96,7 @@ pub fn frame(args: &FrameBenchArgs) -> anyhow::Result<()> {
         &body.triangles,
         Some(&body.weld),
     );
+    gpu_avatar.set_hands(hands.clone());
     let mut rows = Vec::new();
     for gpu in [false, true] {
         let mut times: [Vec<f64>; 4] = Default::default();
@@ -156,6 +159,7 @@ fn interaction(
         Arc::new(body.triangles.clone()),
         Arc::new(body.weld.clone()),
     );
+    let hands = HandsInView::new(avatar, body).map(Arc::new);
     let mut posed = PosedBody::default();
     pose_at(0, &mut posed)?;
     let (lo, hi) = posed
@@ -197,6 +201,7 @@ fn interaction(
                         avatar: avatar.clone(),
                         triangles: triangles.clone(),
                         weld: Some(weld.clone()),
+                        hands: hands.clone(),
                     },
                     pose: PoseRef {
                         id: k as u64 + 1,
@@ -271,6 +276,7 @@ fn settle_to_refined(
                 avatar: avatar.clone(),
                 triangles: Arc::new(body.triangles.clone()),
                 weld: Some(Arc::new(body.weld.clone())),
+                hands: HandsInView::new(avatar, body).map(Arc::new),
             },
             pose: PoseRef {
                 id: 1,

@@ -1,0 +1,111 @@
+//! Hands the photo did not show, drawn only where the photo looked. A close-up leaves the hands
+//! far below its edge, so the default reconstruction left them out with the rest of what it did
+//! not see; but a hand raised to the face comes into the very view the avatar was made from,
+//! and without it the face it covers was drawn bare (the shipped clip's hand over her mouth).
+//! So hands stay in the avatar, in the skin their unseen part is given, and each frame a hand is
+//! drawn only while its wrist, middle knuckle or middle fingertip, carried back to the photo's
+//! pose by the body's root, lies where the photo's camera saw (within [`SEEN_MARGIN`] of the
+//! square, as what is kept of the body); hanging below the bust it is hidden. (The wrist alone
+//! was not enough: the shipped clip's hand over her mouth has its wrist below the frame.) A hand
+//! the photo showed is drawn as the avatar has it.
+
+use glam::{Affine3A, Vec3};
+
+use super::Avatar;
+use crate::body::{Posable, PosedBody};
+use crate::camera::Camera;
+
+/// The body just past the photo's edge is kept (turned views see a little of it, coloured from
+/// what the photo shows next to it): this share of the photo's side beyond each edge.
+pub const SEEN_MARGIN: f32 = 0.25;
+
+/// Whether `camera` sees `point` within `bounds` (left, top, right, bottom, in its pixels) or
+/// within [`SEEN_MARGIN`] of them.
+pub fn seen_near(camera: &Camera, bounds: [f32; 4], point: Vec3) -> bool {
+    let [left, top, right, bottom] = bounds;
+    let (mx, my) = (
+        SEEN_MARGIN * camera.width as f32,
+        SEEN_MARGIN * camera.height as f32,
+    );
+    let p = camera.project(point);
+    p.z > 0.0 && (left - mx..right + mx).contains(&p.x) && (top - my..bottom + my).contains(&p.y)
+}
+
+/// An avatar's hands the photo did not show, with what deciding their visibility needs.
+#[derive(Clone, Debug)]
+pub struct HandsInView {
+    /// Per body vertex: 0 off those hands, 1 the left hand's, 2 the right's.
+    sides: Vec<u8>,
+    /// Each hand's wrist, middle knuckle and middle fingertip joints.
+    joints: [[usize; 3]; 2],
+    /// The root joint's world transform at the photo's pose, and the photo's camera.
+    root: Affine3A,
+    camera: Camera,
+}
+
+impl HandsInView {
+    /// `None` for an avatar without its photo's view, a body without hand parts and wrists
+    /// (EHM's), or when the photo showed both hands: those are drawn as the avatar has them.
+    pub fn new(avatar: &Avatar, body: &impl Posable) -> Option<Self> {
+        let view = avatar.source_view.as_ref()?;
+        let joint = |name: &str| body.joint_names().position(|n| n == name);
+        let hand = |side: &str| -> Option<[usize; 3]> {
+            Some([
+                joint(&format!("wrist.{side}"))?,
+                joint(&format!("finger3-1.{side}"))?,
+                joint(&format!("finger3-3.{side}"))?,
+            ])
+        };
+        let joints = [hand("L")?, hand("R")?];
+        let mut posed = PosedBody::default();
+        body.pose(&avatar.base_pose(body), &mut posed).ok()?;
+        let mut hands = Self {
+            sides: Vec::new(),
+            joints,
+            root: *posed.joints.first()?,
+            camera: view.camera,
+        };
+        let unseen = hands.in_view(&posed).map(|seen| !seen);
+        hands.sides = (0..body.vertex_count())
+            .map(|v| match body.part_of(v) {
+                Some("hand.L") if unseen[0] => 1,
+                Some("hand.R") if unseen[1] => 2,
+                _ => 0,
+            })
+            .collect();
+        hands.sides.iter().any(|&s| s != 0).then_some(hands)
+    }
+
+    /// Whether each hand (left, right) of the body posed as `posed` is in the photo's view.
+    pub fn in_view(&self, posed: &PosedBody) -> [bool; 2] {
+        let Some(root) = posed.joints.first() else {
+            return [true; 2];
+        };
+        let back = self.root * root.inverse();
+        let bounds = [
+            0.0,
+            0.0,
+            self.camera.width as f32,
+            self.camera.height as f32,
+        ];
+        self.joints.map(|hand| {
+            hand.iter().any(|&j| {
+                posed.joints.get(j).is_none_or(|joint| {
+                    let at = back.transform_point3a(joint.translation).into();
+                    seen_near(&self.camera, bounds, at)
+                })
+            })
+        })
+    }
+
+    /// Per body vertex, 1 where it is drawn and 0 on a hand out of the photo's view.
+    pub fn visibility(&self, posed: &PosedBody, out: &mut Vec<f32>) {
+        let [left, right] = self.in_view(posed);
+        out.clear();
+        out.extend(self.sides.iter().map(|&s| match s {
+            1 => f32::from(u8::from(left)),
+            2 => f32::from(u8::from(right)),
+            _ => 1.0,
+        }));
+    }
+}
