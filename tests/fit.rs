@@ -473,42 +473,50 @@ fn the_irises_are_found_in_the_face_mesh_eyes() {
 #[test]
 fn shut_eyes_are_fitted_shut() {
     let body = BodyModel::default_body().expect("body");
-    let mut pipeline = Pipeline::default();
-    let clip = data("assets/videos/pexels_3063838_woman_emotions.mp4");
-    let mut video = guava::video::open(&clip, 30.0).expect("the shipped clip");
-    let mut blinks = Vec::new();
-    while let Some(frame) = video.next_frame() {
-        let frame = frame.expect("decodes");
-        if ![0, 240].contains(&frame.index) {
-            continue;
-        }
-        let name = format!("clip frame {}", frame.index);
-        let photo = guava::pipeline::Photo::Pixels {
-            name: &name,
-            pixels: frame.pixels,
-            has_alpha: false,
-        };
-        let source = pipeline
-            .source(
-                guava::body::BodyRef::Template(&body),
-                photo,
-                Tracked::Fit,
-                guava::pipeline::Framing::KeepCentred,
-                &mut |_| true,
-            )
-            .expect("fitted");
-        let unit = |u: &str| source.view.pose.coefficients[body.target_index(u).expect("unit")];
-        let blink = unit("eyeBlinkLeft") + unit("eyeBlinkRight");
-        println!("{name}: blinks {blink:.2} summed over both eyes");
-        blinks.push(blink);
-        if frame.index == 240 {
-            break;
-        }
-    }
+    let blinks: Vec<f32> = fitted_clip_frames(&body, &[0, 240])
+        .iter()
+        .zip([0, 240])
+        .map(|(source, k)| {
+            let unit = |u: &str| source.view.pose.coefficients[body.target_index(u).expect("unit")];
+            let blink = unit("eyeBlinkLeft") + unit("eyeBlinkRight");
+            println!("clip frame {k}: blinks {blink:.2} summed over both eyes");
+            blink
+        })
+        .collect();
     let [shut, open] = blinks[..] else {
         panic!("frames 0 and 240: {blinks:?}");
     };
     assert!(shut > 0.3 && open < 0.1, "shut {shut}, open {open}");
+}
+
+/// The shipped clip's frames `wanted` (in increasing order), each fitted as a photo is.
+fn fitted_clip_frames(body: &BodyModel, wanted: &[usize]) -> Vec<guava::pipeline::Source> {
+    let mut pipeline = Pipeline::default();
+    let clip = data("assets/videos/pexels_3063838_woman_emotions.mp4");
+    let mut video = guava::video::open(&clip, 30.0).expect("the shipped clip");
+    let last = wanted.iter().copied().max().unwrap_or(0);
+    std::iter::from_fn(|| video.next_frame())
+        .map(|f| f.expect("decodes"))
+        .take_while(|f| f.index <= last)
+        .filter(|f| wanted.contains(&f.index))
+        .map(|frame| {
+            let name = format!("clip frame {}", frame.index);
+            let photo = guava::pipeline::Photo::Pixels {
+                name: &name,
+                pixels: frame.pixels,
+                has_alpha: false,
+            };
+            pipeline
+                .source(
+                    guava::body::BodyRef::Template(body),
+                    photo,
+                    Tracked::Fit,
+                    guava::pipeline::Framing::KeepCentred,
+                    &mut |_| true,
+                )
+                .expect("fitted")
+        })
+        .collect()
 }
 
 /// A hand over the face in a close-up is found and reached: in the shipped clip's frame 72 her
@@ -523,27 +531,9 @@ fn shut_eyes_are_fitted_shut() {
 #[test]
 fn a_hand_over_the_face_is_found_and_reached() {
     let body = BodyModel::default_body().expect("body");
-    let mut pipeline = Pipeline::default();
-    let clip = data("assets/videos/pexels_3063838_woman_emotions.mp4");
-    let mut video = guava::video::open(&clip, 30.0).expect("the shipped clip");
-    let frame = std::iter::from_fn(|| video.next_frame())
-        .map(|f| f.expect("decodes"))
-        .find(|f| f.index == 72)
-        .expect("frame 72");
-    let photo = guava::pipeline::Photo::Pixels {
-        name: "clip frame 72",
-        pixels: frame.pixels,
-        has_alpha: false,
+    let [source] = &fitted_clip_frames(&body, &[72])[..] else {
+        panic!("frame 72");
     };
-    let source = pipeline
-        .source(
-            guava::body::BodyRef::Template(&body),
-            photo,
-            Tracked::Fit,
-            guava::pipeline::Framing::KeepCentred,
-            &mut |_| true,
-        )
-        .expect("fitted");
     let fit = source.report.fit.as_ref().expect("fitted");
     let hands = fit.hands.as_ref().expect("her hand is found");
     println!(

@@ -11,6 +11,7 @@ use guava::photo::SourceImage;
 use guava::raster::rasterize;
 use guava::reconstruct::texture::inverse_texture_map;
 use guava::reconstruct::{DEFAULT_UV_SIZE, ReconstructError, Report, UvMap, reconstruct_default};
+use guava::render::GpuAvatar;
 use guava::synthetic::{banded_texture, photo, upper_body_camera};
 use guava::tracking::SourceView;
 use std::sync::OnceLock;
@@ -43,6 +44,18 @@ fn rest_photo() -> (SourceView, image::RgbaImage) {
     };
     let image = photo(body, &view.pose, &view.camera, banded_texture).expect("photo");
     (view, image)
+}
+
+/// `avatar` on the default body, on `renderer`'s GPU for its rig pass.
+fn gpu_avatar(renderer: &guava::render::HeadlessRenderer, avatar: &Avatar) -> GpuAvatar {
+    let body = body();
+    GpuAvatar::new(
+        &renderer.gpu.device,
+        renderer.pipelines.clone(),
+        avatar,
+        &body.triangles,
+        Some(&body.weld),
+    )
 }
 
 fn cloud_for(avatar: &Avatar, pose: &BodyPose) -> GaussianCloud {
@@ -619,7 +632,7 @@ fn raster_tunings_agree_on_an_animated_avatar() {
 /// jacket and hair, so every kind of Gaussian is drawn: template, UV and beyond the body.
 #[test]
 fn the_gpu_rig_matches_the_cpu_rig() {
-    use guava::render::{GpuAvatar, HeadlessRenderer};
+    use guava::render::HeadlessRenderer;
     let body = body();
     let (view, _) = rest_photo();
     let image = guava::synthetic::Subject::clothed_and_haired(body)
@@ -635,13 +648,7 @@ fn the_gpu_rig_matches_the_cpu_rig() {
         *r = Vec3::new(1.0, 0.3 * (j % 5) as f32 - 0.6, 0.5).normalize() * 2.8;
     }
     let mut renderer = HeadlessRenderer::new(guava::gpu::GpuContext::headless().expect("adapter"));
-    let mut gpu_avatar = GpuAvatar::new(
-        &renderer.gpu.device,
-        renderer.pipelines.clone(),
-        &avatar,
-        &body.triangles,
-        Some(&body.weld),
-    );
+    let mut gpu_avatar = gpu_avatar(&renderer, &avatar);
     // Both draw what the photo showed (the rest photo leaves out the hands and feet).
     let shown = avatar.template.len() + avatar.skinned.len() + avatar.shown_uv(false);
     assert!(shown < avatar.len());
@@ -716,7 +723,7 @@ fn the_gpu_rig_matches_the_cpu_rig() {
 #[test]
 fn hands_the_photo_did_not_show_are_drawn_only_in_its_view() {
     use guava::avatar::HandsInView;
-    use guava::render::{GpuAvatar, HeadlessRenderer};
+    use guava::render::HeadlessRenderer;
     let body = body();
     let neck = body.joints[body.joint_index("neck01").expect("neck")].rest;
     let target = neck + Vec3::new(0.0, 0.05, 0.0);
@@ -764,13 +771,7 @@ fn hands_the_photo_did_not_show_are_drawn_only_in_its_view() {
         .reach(body, &view.pose, chin)
         .expect("reaches");
     let mut renderer = HeadlessRenderer::new(guava::gpu::GpuContext::headless().expect("adapter"));
-    let mut gpu_avatar = GpuAvatar::new(
-        &renderer.gpu.device,
-        renderer.pipelines.clone(),
-        &avatar,
-        &body.triangles,
-        Some(&body.weld),
-    );
+    let mut gpu_avatar = gpu_avatar(&renderer, &avatar);
     gpu_avatar.set_hands(hands.clone());
     let mut drawn = Vec::new();
     for (name, pose) in [
