@@ -58,6 +58,18 @@ fn gpu_avatar(renderer: &guava::render::HeadlessRenderer, avatar: &Avatar) -> Gp
     )
 }
 
+/// The Gaussians the GPU rig pass writes for `posed`, read back.
+fn posed_on_gpu(
+    renderer: &mut guava::render::HeadlessRenderer,
+    gpu_avatar: &mut GpuAvatar,
+    posed: &PosedBody,
+) -> Vec<guava::render::GpuGaussian> {
+    renderer.pose_avatar(gpu_avatar, posed).expect("same body");
+    renderer
+        .splatter
+        .read_gaussians(&renderer.gpu.device, &renderer.gpu.queue)
+}
+
 fn cloud_for(avatar: &Avatar, pose: &BodyPose) -> GaussianCloud {
     let mut posed = PosedBody::default();
     body().pose(pose, &mut posed).expect("pose");
@@ -669,12 +681,7 @@ fn the_gpu_rig_matches_the_cpu_rig() {
         let mut posed = PosedBody::default();
         body.pose(pose, &mut posed).expect("pose");
         let cpu = cloud_for(&avatar, pose);
-        renderer
-            .pose_avatar(&mut gpu_avatar, &posed)
-            .expect("same body");
-        let gpu = renderer
-            .splatter
-            .read_gaussians(&renderer.gpu.device, &renderer.gpu.queue);
+        let gpu = posed_on_gpu(&mut renderer, &mut gpu_avatar, &posed);
         assert_eq!(gpu.len(), cpu.len(), "{name}");
         let mut worst = [0.0f32; 4];
         for (i, g) in gpu.iter().enumerate() {
@@ -784,12 +791,7 @@ fn hands_the_photo_did_not_show_are_drawn_only_in_its_view() {
         Rig::with_hands(hands.clone())
             .animate(&avatar, &posed, body, &mut cpu)
             .expect("same body");
-        renderer
-            .pose_avatar(&mut gpu_avatar, &posed)
-            .expect("same body");
-        let gpu = renderer
-            .splatter
-            .read_gaussians(&renderer.gpu.device, &renderer.gpu.queue);
+        let gpu = posed_on_gpu(&mut renderer, &mut gpu_avatar, &posed);
         let worst = gpu
             .iter()
             .zip(&cpu.opacities)
