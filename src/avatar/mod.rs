@@ -151,7 +151,8 @@ pub struct Avatar {
     pub skinned: SkinnedGaussians,
     /// How many of the last UV Gaussians lie on body parts the photo did not show (below an
     /// upper-body portrait's edge): neutral grey, and drawn only when asked
-    /// ([`Avatar::shown_uv`]), so the avatar is an upper-body avatar as GUAVA's is.
+    /// ([`Avatar::shown_uv`]), so the avatar is an upper-body avatar as GUAVA's is. Hands are
+    /// not among them (since 2026-12-07): they are drawn where the photo looked ([`HandsInView`]).
     pub outside: usize,
 }
 
