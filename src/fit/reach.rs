@@ -80,7 +80,7 @@ impl Arm {
     }
 
     /// `pose` with this arm turned at the shoulder and the elbow so that its wrist lies at
-    /// `target` (world; as near as the arm reaches), the elbow bent towards [`ELBOW_POLE`].
+    /// `target` (world; as near as the arm reaches), the elbow bent down, a little out and forward.
     pub fn reach(&self, body: &BodyModel, pose: &BodyPose, target: Vec3) -> Option<BodyPose> {
         let mut posed = PosedBody::default();
         body.pose(pose, &mut posed).ok()?;
