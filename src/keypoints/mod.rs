@@ -350,7 +350,7 @@ impl Landmarkers {
                 continue;
             }
             let free = |s: Side| hands.iter().all(|h| h.side != s);
-            if let Some(side) = palm_side(pose, face, palm.wrist).filter(|&s| free(s)) {
+            if let Some(side) = palm_side(pose, face, palm.wrist, free) {
                 hands.extend(self.hand.detect_in(source, palm.roi, side)?);
             }
         }
@@ -358,34 +358,37 @@ impl Landmarkers {
     }
 }
 
-/// Whose hand a palm with its wrist at `wrist` is. Where the pose model sees the person: the
-/// side whose pose wrist is nearer among the arms that reach it ([`reaches`]; a palm out of
-/// both arms' reach is someone else's). Where it does not ([`crate::fit::no_body`]: a face
-/// close up, on which it finds no body or misreads one) but the face mesh does: the side of the
-/// face's midline the wrist is on (an arm comes up from its own shoulder, below the frame), for
-/// a wrist within [`FACE_REACH`] of the face.
-fn palm_side(pose: &PoseKeypoints, face: Option<&FaceLandmarks>, wrist: Vec2) -> Option<Side> {
-    let sides = [Side::Left, Side::Right];
+/// Whose hand a palm with its wrist at `wrist` is, among the sides still `free`. Where the pose
+/// model sees the person: the side whose pose wrist is nearer among the arms that reach it
+/// ([`reaches`]; a palm out of both arms' reach is someone else's). Where it does not
+/// ([`crate::fit::no_body`]: a face close up, on which it finds no body or misreads one) but
+/// the face mesh does: the side of the face's midline the wrist is on (an arm comes up from its
+/// own shoulder, below the frame), for a wrist within [`FACE_REACH`] of the face.
+fn palm_side(
+    pose: &PoseKeypoints,
+    face: Option<&FaceLandmarks>,
+    wrist: Vec2,
+    free: impl Fn(Side) -> bool,
+) -> Option<Side> {
     if crate::fit::no_body(pose, face).is_none() {
         let pose_wrist = |side| pose.point(if side == Side::Left { 15 } else { 16 }).0;
         let d = |s| pose_wrist(s).distance(wrist);
-        return sides
+        return [Side::Left, Side::Right]
             .into_iter()
-            .filter(|&s| reaches(pose, s, wrist))
+            .filter(|&s| free(s) && reaches(pose, s, wrist))
             .min_by(|&a, &b| d(a).total_cmp(&d(b)));
     }
     let face = face?;
     let roi = Roi::face_from_landmarks(&face.points);
     let across = face.points[FACE_EYE_CORNERS.1] - face.points[FACE_EYE_CORNERS.0];
     let off = wrist - roi.centre;
-    (off.length() <= FACE_REACH * roi.side).then(|| {
-        // The eye corners run from the person's right to their left.
-        if off.dot(across) > 0.0 {
-            Side::Left
-        } else {
-            Side::Right
-        }
-    })
+    // The eye corners run from the person's right to their left.
+    let side = if off.dot(across) > 0.0 {
+        Side::Left
+    } else {
+        Side::Right
+    };
+    (off.length() <= FACE_REACH * roi.side && free(side)).then_some(side)
 }
 
 /// A palm may lie this many face crops ([`Roi::face_from_landmarks`]) from the face's centre
