@@ -725,8 +725,9 @@ fn the_gpu_rig_matches_the_cpu_rig() {
 /// the body at rest (0.5 m of height in view) leaves both hands far out. At the photo's pose no
 /// Gaussian on either hand is drawn (they hang below the bust); in the demo motion's wave the
 /// raised hand's are, as a hand raised to the face is in a close-up video, and the lowered hand's
-/// stay hidden; the GPU rig decides as the CPU rig does. Before, such hands were left out of the
-/// avatar altogether (the shipped clip's hand over her mouth was never drawn).
+/// stay hidden; the GPU rig decides as the CPU rig does; with the body the photo did not show
+/// drawn (the viewer's switch), both hands are. Before, such hands were left out of the avatar
+/// altogether (the shipped clip's hand over her mouth was never drawn).
 #[test]
 fn hands_the_photo_did_not_show_are_drawn_only_in_its_view() {
     use guava::avatar::HandsInView;
@@ -808,6 +809,13 @@ fn hands_the_photo_did_not_show_are_drawn_only_in_its_view() {
         drawn.push((l, r));
     }
     assert_eq!(drawn, [(0, 0), (0, right.len())]);
+    // With the body the photo did not show drawn (the viewer's switch), so are its hands.
+    gpu_avatar.show_outside(&renderer.gpu.queue, true);
+    let mut posed = PosedBody::default();
+    body.pose(&view.pose, &mut posed).expect("pose");
+    let gpu = posed_on_gpu(&mut renderer, &mut gpu_avatar, &posed);
+    let shown = left.iter().chain(&right).filter(|&&i| gpu[i].opacity > 0.0);
+    assert_eq!(shown.count(), left.len() + right.len());
 }
 
 /// Whether a photo carries its own mask: RGBA and grey-alpha PNGs with some transparency do, an

@@ -215,7 +215,8 @@ impl GpuAvatar {
     }
 
     /// Draws the parts the photo did not show (in neutral grey) too, or not; takes effect at the
-    /// next [`Self::attach`] and [`Self::encode`].
+    /// next [`Self::attach`] and [`Self::encode`], and for the hands it did not show (drawn
+    /// wherever they are while it is on) at the next [`Self::set_pose`].
     pub fn show_outside(&mut self, queue: &wgpu::Queue, show: bool) {
         if show == self.show_outside {
             return;
@@ -319,7 +320,8 @@ impl GpuAvatar {
             self.weld.as_deref(),
         );
         self.visibility.clear();
-        if let Some(hands) = &self.hands {
+        // With the body the photo did not show drawn, so are its hands, wherever they are.
+        if let Some(hands) = self.hands.as_ref().filter(|_| !self.show_outside) {
             hands.visibility(posed, &mut self.visibility);
         }
         let seen = |i: usize| self.visibility.get(i).copied().unwrap_or(1.0);
