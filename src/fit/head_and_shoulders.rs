@@ -8,22 +8,10 @@
 use glam::Vec2;
 
 use crate::body::BodyModel;
-use crate::keypoints::{FaceLandmarks, Keypoint};
+use crate::keypoints::{FACE_LEFT_EYE, FACE_NOSE, FACE_RIGHT_EYE, FaceLandmarks, Keypoint};
 
-/// The chin's face-mesh point.
-const CHIN: usize = 152;
-/// Pose-model shoulders both this many eye spans above the face mesh's chin are another reading
-/// (on a drawn head the pose model put them on the cheeks, about one span above it).
-const SHOULDERS_ABOVE_CHIN_EYE_SPANS: f32 = 0.5;
-/// A pose-model nose further than this many eye spans from the face mesh's is another reading.
-const NOSE_AGREES_EYE_SPANS: f32 = 0.5;
-
-/// Face-mesh points standing for the COCO head points: the nose tip, each eye's two corners
-/// (their midpoint is the eye), and the face's edge at the ears' height. The person's left is
-/// MediaPipe's left (the image's right).
-const NOSE: usize = 1;
-const LEFT_EYE: [usize; 2] = [362, 263];
-const RIGHT_EYE: [usize; 2] = [33, 133];
+/// Face-mesh points standing for the COCO ears: the face's edge at the ears' height (the nose
+/// and eyes are [`FACE_NOSE`] and the midpoints of [`FACE_LEFT_EYE`] and [`FACE_RIGHT_EYE`]).
 const LEFT_EAR: usize = 454;
 const RIGHT_EAR: usize = 234;
 /// Vertices this close to the shoulder points' height (metres) make the body's outline there.
@@ -63,35 +51,6 @@ impl Proportions {
     }
 }
 
-/// Why the pose model's confident `keypoints` cannot be the person whose face is `face`, if
-/// they cannot: its nose is not the face's, or a shoulder is above the chin. On a drawn body
-/// framed from the collarbones up it put both shoulders on the cheeks, with a presence of 0.9.
-pub fn contradicts(keypoints: &[Keypoint], face: &FaceLandmarks) -> Option<String> {
-    let seen = |name: &str| {
-        keypoints
-            .iter()
-            .find(|k| k.name == name && k.confidence >= super::MIN_CONFIDENCE)
-            .map(|k| k.pixel)
-    };
-    let point = |i: usize| face.points.get(i).copied();
-    let (nose, chin) = (point(NOSE)?, point(CHIN)?);
-    let span = point(LEFT_EYE[1])?.distance(point(RIGHT_EYE[0])?);
-    if seen("nose").is_some_and(|n| n.distance(nose) > NOSE_AGREES_EYE_SPANS * span) {
-        return Some("the pose model's nose is not the face's".into());
-    }
-    // Both, and clearly: one raised shoulder, or a head bent down over it (the cameraman,
-    // looking into his camera), is a body, not a misreading.
-    let shoulders: Vec<Vec2> = ["left_shoulder", "right_shoulder"]
-        .into_iter()
-        .filter_map(seen)
-        .collect();
-    (shoulders.len() == 2
-        && shoulders
-            .iter()
-            .all(|s| s.y < chin.y - SHOULDERS_ABOVE_CHIN_EYE_SPANS * span))
-    .then(|| "the pose model's shoulders are above the chin".into())
-}
-
 /// The COCO head and shoulder keypoints of `face` (source pixels of a `side`² image), the
 /// shoulders at the height the body's proportions give below the eyes, inside the person
 /// mask's outline there (`mask` at a pixel's centre, the person ≥ ½; only that row is read);
@@ -105,7 +64,7 @@ pub fn keypoints_from_face(
     let proportions = Proportions::of(body)?;
     let point = |i: usize| face.points.get(i).copied();
     let mid = |[a, b]: [usize; 2]| Some(0.5 * (point(a)? + point(b)?));
-    let (left_eye, right_eye) = (mid(LEFT_EYE)?, mid(RIGHT_EYE)?);
+    let (left_eye, right_eye) = (mid(FACE_LEFT_EYE)?, mid(FACE_RIGHT_EYE)?);
     let span = left_eye.distance(right_eye);
     let eyes = 0.5 * (left_eye + right_eye);
     // Image y grows downward; the shoulders are below the eyes.
@@ -133,7 +92,7 @@ pub fn keypoints_from_face(
         confidence: 1.0,
     };
     Some(vec![
-        keypoint("nose", point(NOSE)?),
+        keypoint("nose", point(FACE_NOSE)?),
         keypoint("left_eye", left_eye),
         keypoint("right_eye", right_eye),
         keypoint("left_ear", point(LEFT_EAR)?),

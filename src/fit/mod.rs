@@ -50,8 +50,9 @@ use crate::body::{BodyModel, EhmModel, HEAD_SIZE, Landmark, PointPoser, TargetGr
 use crate::camera::GUAVA_INVTANFOV;
 use crate::keypoints::{
     Detections, FACE_EYE_CORNERS, FaceLandmarker, FaceLandmarks, HandLandmarks, Iris, Keypoint,
-    PoseKeypoints, Side,
+    Side,
 };
+pub use crate::keypoints::{MIN_CONFIDENCE, MIN_PRESENCE, no_body};
 use crate::tracking::SourceView;
 
 /// The joints the body stage turns (besides the root).
@@ -120,11 +121,6 @@ pub const SHAPE_PRIOR_PX: f64 = 20.0;
 /// face's outer-eye-corner distance (so it does not depend on how many pixels the face covers).
 /// Weak, because a unit moves a dozen points at once; it keeps units no point sees at neutral.
 pub const EXPRESSION_PRIOR_PER_EYE_SPAN: f64 = 0.03;
-/// Below this pose presence the pose model sees no person (MediaPipe's tracking threshold), and
-/// its landmarks, confident-looking or not, are not fitted.
-pub const MIN_PRESENCE: f32 = 0.5;
-/// Keypoints the model is less sure of are left out.
-pub const MIN_CONFIDENCE: f32 = 0.5;
 /// In a video's later frames points fade in from this confidence on (full weight at
 /// 2·[`MIN_CONFIDENCE`] − this).
 const WARM_CONFIDENCE: f32 = 0.3;
@@ -264,17 +260,6 @@ pub fn body_keypoints<'a>(
     };
     let points = from_face().ok_or(FitError::NoPerson { presence })?;
     Ok((points.into(), Some(why)))
-}
-
-/// Why the pose model's points are not the body of the person whose face is `face`, if they are
-/// not: it sees no person, or its points contradict the face ([`head_and_shoulders`]); the fit
-/// then takes the head and shoulders from the face.
-pub fn no_body(pose: &PoseKeypoints, face: Option<&FaceLandmarks>) -> Option<String> {
-    let presence = pose.presence;
-    if presence.is_nan() || presence < MIN_PRESENCE {
-        return Some(format!("the pose model's presence is {presence:.2}"));
-    }
-    face.and_then(|face| head_and_shoulders::contradicts(&pose.keypoints, face))
 }
 
 /// [`fit_detections`] for GUAVA's body: fits EHM's linear form ([`EhmModel::linearised`]) and

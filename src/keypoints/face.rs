@@ -19,6 +19,11 @@ pub const FACE_INPUT: usize = 192;
 pub const FACE_POINTS: usize = 468;
 /// The outer eye corners (subject's right, subject's left): MediaPipe levels the crop by them.
 pub const FACE_EYE_CORNERS: (usize, usize) = (33, 263);
+/// The nose tip, and each eye's two corners (their midpoint is the eye; the person's left is
+/// MediaPipe's left, the image's right).
+pub const FACE_NOSE: usize = 1;
+pub const FACE_LEFT_EYE: [usize; 2] = [362, 263];
+pub const FACE_RIGHT_EYE: [usize; 2] = [33, 133];
 /// Below this presence the crop holds no face (MediaPipe's tracking threshold).
 const MIN_PRESENCE: f32 = 0.5;
 

@@ -7,6 +7,7 @@
 //! each eye of the face mesh. EHM-Tracker's own models (YOLOX and DWPose, [`Wholebody`]) can
 //! stand in for the body and hand points.
 
+mod agreement;
 mod detector;
 mod face;
 mod face_detector;
@@ -22,9 +23,11 @@ mod ssd;
 mod wholebody;
 mod yolox;
 
+pub use agreement::{MIN_CONFIDENCE, MIN_PRESENCE, no_body};
 pub use detector::{DETECTOR_INPUT, DETECTOR_MODEL_PATH, PersonDetection, PoseDetector};
 pub use face::{
-    FACE_EYE_CORNERS, FACE_INPUT, FACE_MODEL_PATH, FACE_POINTS, FaceLandmarker, FaceLandmarks,
+    FACE_EYE_CORNERS, FACE_INPUT, FACE_LEFT_EYE, FACE_MODEL_PATH, FACE_NOSE, FACE_POINTS,
+    FACE_RIGHT_EYE, FaceLandmarker, FaceLandmarks,
 };
 pub use face_detector::{FACE_DETECTOR_INPUT, FACE_DETECTOR_MODEL_PATH, FaceDetector};
 pub use hand::{HAND_INPUT, HAND_MODEL_PATH, HAND_POINTS, HandLandmarker, HandLandmarks, Side};
@@ -361,7 +364,7 @@ impl Landmarkers {
 /// Whose hand a palm with its wrist at `wrist` is, among the sides still `free`. Where the pose
 /// model sees the person: the side whose pose wrist is nearer among the arms that reach it
 /// ([`reaches`]; a palm out of both arms' reach is someone else's). Where it does not
-/// ([`crate::fit::no_body`]: a face close up, on which it finds no body or misreads one) but
+/// ([`no_body`]: a face close up, on which it finds no body or misreads one) but
 /// the face mesh does: the side of the face's midline the wrist is on (an arm comes up from its
 /// own shoulder, below the frame), for a wrist within [`FACE_REACH`] of the face.
 fn palm_side(
@@ -370,7 +373,7 @@ fn palm_side(
     wrist: Vec2,
     free: impl Fn(Side) -> bool,
 ) -> Option<Side> {
-    if crate::fit::no_body(pose, face).is_none() {
+    if no_body(pose, face).is_none() {
         let pose_wrist = |side| pose.point(if side == Side::Left { 15 } else { 16 }).0;
         let d = |s| pose_wrist(s).distance(wrist);
         return [Side::Left, Side::Right]
