@@ -760,6 +760,8 @@ fn fit_from(
         let mut tip = body.landmarks.len() + face_points.len();
         let (mut unknowns, mut temporal) = (Vec::new(), Vec::new());
         for (k, (h, targets)) in input.hands.iter().zip(&hand_targets).enumerate() {
+            // The hand's first point, the wrist, is observed here.
+            let wrist = stage.observations.len();
             for (t, &p) in targets.iter().zip(&h.points) {
                 let target = match t {
                     BodyPoint::Joint(j) => Target::Joint(*j),
@@ -778,8 +780,14 @@ fn fit_from(
             // last frame lost it): no pull to where it was then.
             let mut placed = false;
             if let Some((_, arm)) = reaching.iter().find(|(i, _)| *i == k) {
-                let camera = camera_for(result.camera, side);
-                if let Some(pose) = arm.place(body, &result.pose, &camera, h.points[0], palm as f32)
+                let seen = stage.projected(&result, wrist..wrist + 1)[0];
+                if seen.distance(h.points[0]) > reach::REPLACE_PALMS * palm as f32
+                    && let Some(pose) = arm.place(
+                        body,
+                        &result.pose,
+                        &camera_for(result.camera, side),
+                        h.points[0],
+                    )
                 {
                     (result.pose, placed) = (pose, true);
                 }

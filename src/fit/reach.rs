@@ -14,8 +14,9 @@ use crate::body::{BodyModel, BodyPose, PosedBody};
 use crate::camera::Camera;
 use crate::keypoints::Side;
 
-/// The arm is placed afresh when the body's wrist is further than this many palms (wrist to
-/// middle knuckle) from the hand model's in the image; nearer, the hand stage refines it.
+/// The arm is placed afresh ([`Arm::place`]) when the body's wrist is further than this many
+/// palms (wrist to middle knuckle) from the hand model's in the image; nearer, the hand stage
+/// refines it.
 pub(super) const REPLACE_PALMS: f32 = 1.0;
 /// Where the elbow points (before the torso's turn), on the body's left (+x; the right
 /// mirrors it): down, a little out and forward, as an arm raised to the face bends.
@@ -56,23 +57,17 @@ impl Arm {
         j == self.shoulder || j == self.elbow
     }
 
-    /// `pose` with this arm placed for a wrist observed at pixel `wrist` through `camera` (as
-    /// near the camera as the face's front), or `None` when the body's wrist already projects
-    /// within `palm · REPLACE_PALMS` of it.
+    /// `pose` with this arm placed for a wrist observed at pixel `wrist` through `camera`, as
+    /// near the camera as the face's front.
     pub(super) fn place(
         &self,
         body: &BodyModel,
         pose: &BodyPose,
         camera: &Camera,
         wrist: Vec2,
-        palm: f32,
     ) -> Option<BodyPose> {
         let mut posed = PosedBody::default();
         body.pose(pose, &mut posed).ok()?;
-        let seen = camera.project(posed.joints[self.wrist].translation.into());
-        if Vec2::new(seen.x, seen.y).distance(wrist) <= REPLACE_PALMS * palm {
-            return None;
-        }
         let nose = body.landmarks.iter().position(|l| l.name == "nose")?;
         let nose = body.landmark_positions(&posed.vertices)[nose];
         let depth = camera.project(nose).z + WRIST_BEHIND_NOSE;

@@ -83,6 +83,22 @@ pub struct AvatarRef {
     pub hands: Option<Arc<HandsInView>>,
 }
 
+impl AvatarRef {
+    /// `avatar` (this one, or its coarse stand-in) on the GPU for `pipelines`, bound to this
+    /// body's mesh and drawing the hands its photo did not show only where it looked.
+    pub fn upload(
+        &self,
+        device: &wgpu::Device,
+        pipelines: Arc<SplatPipelines>,
+        avatar: &Avatar,
+    ) -> GpuAvatar {
+        let weld = self.weld.as_deref().map(Vec::as_slice);
+        let mut gpu = GpuAvatar::new(device, pipelines, avatar, &self.triangles, weld);
+        gpu.set_hands(self.hands.clone());
+        gpu
+    }
+}
+
 /// A posed body and the id of that pose: each id is rigged once.
 #[derive(Clone)]
 pub struct PoseRef {
@@ -352,17 +368,9 @@ impl ViewRenderer {
                 };
                 if self.avatar.as_ref().is_none_or(|a| a.id != avatar.id) {
                     report.avatar_uploads += 1;
-                    let mut full = GpuAvatar::new(
-                        device,
-                        self.pipelines.clone(),
-                        &avatar.avatar,
-                        &avatar.triangles,
-                        avatar.weld.as_deref().map(Vec::as_slice),
-                    );
-                    full.set_hands(avatar.hands.clone());
                     self.avatar = Some(ShownAvatar {
                         id: avatar.id,
-                        full,
+                        full: avatar.upload(device, self.pipelines.clone(), &avatar.avatar),
                         preview: None,
                     });
                 }
@@ -375,16 +383,7 @@ impl ViewRenderer {
                 let gpu = match frame.preview {
                     true => shown.preview.get_or_insert_with(|| {
                         report.avatar_uploads += 1;
-                        let preview = avatar.avatar.preview();
-                        let mut gpu = GpuAvatar::new(
-                            device,
-                            self.pipelines.clone(),
-                            &preview,
-                            &avatar.triangles,
-                            avatar.weld.as_deref().map(Vec::as_slice),
-                        );
-                        gpu.set_hands(avatar.hands.clone());
-                        gpu
+                        avatar.upload(device, self.pipelines.clone(), &avatar.avatar.preview())
                     }),
                     false => &mut shown.full,
                 };

@@ -75,11 +75,15 @@ impl AvatarState {
             avatar: self.avatar.clone(),
             triangles: body.triangles(),
             weld: body.weld(),
-            hands: self
-                .hands
-                .get_or_init(|| HandsInView::new(&self.avatar, &*body.model).map(Arc::new))
-                .clone(),
+            hands: self.hands(body),
         }
+    }
+
+    /// Its hands the photo did not show ([`HandsInView`]), found once.
+    pub fn hands(&self, body: &BodyState) -> Option<Arc<HandsInView>> {
+        self.hands
+            .get_or_init(|| HandsInView::new(&self.avatar, &*body.model).map(Arc::new))
+            .clone()
     }
 }
 

@@ -9,7 +9,6 @@
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
-use guava::avatar::HandsInView;
 use guava::body::{BodyPose, Posable, PosedBody};
 use guava::camera::Camera;
 use guava::gaussians::GaussianCloud;
@@ -295,8 +294,7 @@ fn posed_ply(out: &Path, doc: &mut Document) -> Result<String, String> {
     };
     let posed = body.posed();
     let mut cloud = GaussianCloud::new(avatar.avatar.channels);
-    let hands = HandsInView::new(&avatar.avatar, body.model.as_ref()).map(Arc::new);
-    guava::avatar::Rig::with_hands(hands)
+    guava::avatar::Rig::with_hands(avatar.hands(body))
         .animate(
             &avatar.avatar,
             &posed.posed,

@@ -85,14 +85,7 @@ impl OffscreenRenderer {
         let renderer = &mut self.renderer;
         let (device, queue) = (&renderer.gpu.device, &renderer.gpu.queue);
         if self.avatar.as_ref().is_none_or(|(id, _)| *id != avatar.id) {
-            let mut gpu = GpuAvatar::new(
-                device,
-                renderer.pipelines.clone(),
-                &avatar.avatar,
-                &avatar.triangles,
-                avatar.weld.as_deref().map(Vec::as_slice),
-            );
-            gpu.set_hands(avatar.hands.clone());
+            let gpu = avatar.upload(device, renderer.pipelines.clone(), &avatar.avatar);
             self.avatar = Some((avatar.id, gpu));
         }
         let (_, gpu) = self.avatar.as_mut().expect("made above");
