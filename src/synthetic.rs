@@ -188,6 +188,23 @@ impl<'a> Subject<'a> {
         }
     }
 
+    /// The hair volume and hair hanging from it to the shoulders, beside and behind the neck:
+    /// what a front photo shows only as a strip beside the neck, and a side or back view shows
+    /// whole.
+    pub fn long_haired(body: &'a BodyModel) -> Self {
+        Self {
+            name: "long-haired",
+            hair: hair_volume(body).zip(hanging_hair(body)).map(|(mut v, h)| {
+                let base = v.vertices.len() as u32;
+                v.vertices.extend(h.vertices);
+                v.triangles
+                    .extend(h.triangles.iter().map(|t| t.map(|i| i + base)));
+                v
+            }),
+            ..Self::bare(body)
+        }
+    }
+
     /// Both.
     pub fn clothed_and_haired(body: &'a BodyModel) -> Self {
         Self {
@@ -355,6 +372,55 @@ fn hair_volume(body: &BodyModel) -> Option<Rigid> {
             index[v]
         });
         triangles.push(mapped);
+    }
+    Some(Rigid {
+        joint: head,
+        vertices,
+        triangles,
+    })
+}
+
+/// [`Subject::long_haired`]'s hanging hair: a curtain riding the head, from the ears' height to
+/// just above the shoulders, round the back of the head and neck from one ear to the other on
+/// an ellipse 1.5 cm outside the skull's widest and backmost points.
+fn hanging_hair(body: &BodyModel) -> Option<Rigid> {
+    let head = body.joint_index("head")?;
+    let centre = body.joints[head].rest;
+    let skull = (0..body.vertices.len())
+        .filter(|&v| body.part_of(v) == Some("head") && body.vertices[v].y > centre.y - 0.02);
+    let (half_width, back) = skull.fold((0.0f32, f32::MAX), |(w, b), v| {
+        let p = body.vertices[v];
+        (w.max((p.x - centre.x).abs()), b.min(p.z))
+    });
+    // The shoulders' top beside the neck, where the hair ends.
+    let shoulders = (0..body.vertices.len())
+        .filter(|&v| body.part_of(v) != Some("head"))
+        .map(|v| body.vertices[v])
+        .filter(|p| p.y < centre.y && ((p.x - centre.x).abs() - half_width).abs() < 0.01)
+        .fold(f32::MIN, |top, p| top.max(p.y));
+    let (a, b) = (half_width + 0.015, centre.z - back + 0.015);
+    let (top, bottom) = (centre.y + 0.04, shoulders + 0.01);
+    let (around, down) = (40, 14);
+    let mut vertices = Vec::new();
+    for i in 0..=down {
+        let y = top + (bottom - top) * i as f32 / down as f32;
+        for k in 0..=around {
+            // From one ear (100° from straight back) round the back to the other.
+            let theta = (-100.0 + 200.0 * k as f32 / around as f32).to_radians();
+            vertices.push(Vec3::new(
+                centre.x + a * theta.sin(),
+                y,
+                centre.z - b * theta.cos(),
+            ));
+        }
+    }
+    let at = |i: u32, k: u32| i * (around + 1) + k;
+    let mut triangles = Vec::new();
+    for i in 0..down {
+        for k in 0..around {
+            triangles.push([at(i, k), at(i + 1, k), at(i, k + 1)]);
+            triangles.push([at(i, k + 1), at(i + 1, k), at(i + 1, k + 1)]);
+        }
     }
     Some(Rigid {
         joint: head,

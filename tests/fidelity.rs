@@ -25,7 +25,13 @@ fn a_clothed_and_haired_subject_looks_like_itself_from_turned_views_and_new_pose
     let body = BodyModel::default_body().expect("default body");
     let mut renderer = crate::common::renderer();
     let subject = Subject::clothed_and_haired(&body);
-    let rows = score(&mut renderer, &mut Pipeline::default(), &subject).expect("scores");
+    let rows = score(
+        &mut renderer,
+        &mut Pipeline::default(),
+        &subject,
+        |_, _, _| {},
+    )
+    .expect("scores");
     for ((view, ..), m) in VIEWS.iter().zip(&rows) {
         println!("{view}: {m}");
         assert!(m.iou.is_finite() && m.psnr.is_finite() && m.ssim.is_finite());
@@ -374,7 +380,7 @@ fn hair_stands_off_the_back_of_the_head() {
         "hair {} m off the head (the truth: up to 5 cm)",
         outcome.report.hair
     );
-    let rows = score(&mut renderer, &mut pipeline, &subject).expect("scores");
+    let rows = score(&mut renderer, &mut pipeline, &subject, |_, _, _| {}).expect("scores");
     let by_name = |name: &str| rows[VIEWS.iter().position(|(n, ..)| *n == name).expect(name)];
     let (source, side) = (by_name("source"), by_name("yaw +90° (side)"));
     println!("source: {source}\nside: {side}");

@@ -10,7 +10,7 @@ use super::{EvalError, Metrics, compare, render_view};
 use crate::body::{BodyModel, BodyPose};
 use crate::photo::SourceImage;
 use crate::pipeline::{Mode, Outcome, Photo, Pipeline, Tracked};
-use crate::render::HeadlessRenderer;
+use crate::render::{HeadlessRenderer, SplatImage};
 use crate::synthetic::{Material, Subject, subject_texture, upper_body_camera};
 use crate::tracking::{Retarget, SourceView, demo_motion};
 
@@ -82,11 +82,12 @@ pub fn reconstruct_subject_as(
 }
 
 /// `subject` reconstructed from its front photo ([`reconstruct_subject`]), then compared at
-/// every [`VIEWS`] entry: one row of metrics each.
+/// every [`VIEWS`] entry: one row of metrics each. `look` sees each view's truth and render.
 pub fn score(
     renderer: &mut HeadlessRenderer,
     pipeline: &mut Pipeline,
     subject: &Subject,
+    mut look: impl FnMut(&str, &SourceImage, &SplatImage),
 ) -> Result<Vec<Metrics>, SubjectError> {
     let body: &BodyModel = subject.body;
     let rest = BodyPose::rest(body);
@@ -95,7 +96,7 @@ pub fn score(
     let mut wave = rest.clone();
     Retarget::new(&motion, body).sample(&motion, 6.45, &mut wave);
     let mut rows = Vec::new();
-    for (_, yaw, new_pose) in VIEWS {
+    for (name, yaw, new_pose) in VIEWS {
         let at = SourceView {
             pose: if new_pose { wave.clone() } else { rest.clone() },
             camera: upper_body_camera(body, yaw.to_radians()),
@@ -106,6 +107,7 @@ pub fn score(
             .map_err(crate::reconstruct::ReconstructError::from)?;
         let rendered = render_view(renderer, &outcome.avatar, body, &at)?;
         rows.push(compare(&rendered, &truth)?);
+        look(name, &truth, &rendered);
     }
     Ok(rows)
 }

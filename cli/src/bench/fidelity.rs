@@ -5,19 +5,29 @@
 
 use std::path::Path;
 
+use anyhow::Context;
 use guava::body::BodyModel;
+use guava::eval::side_by_side;
 use guava::eval::subjects::{VIEWS, score};
 use guava::gpu::GpuContext;
 use guava::pipeline::{Mode, Photo, Pipeline, Tracked};
-use guava::render::HeadlessRenderer;
+use guava::render::{HeadlessRenderer, save_png};
 use guava::synthetic::Subject;
 
 use super::body::cpu_name;
 
 #[derive(clap::Args, Clone, Debug)]
-pub struct FidelityBenchArgs {}
+pub struct FidelityBenchArgs {
+    /// A folder for each synthetic subject's truth | render | difference at every view
+    /// (`<subject>_<view>.png`), to look at what the rows score.
+    #[arg(long)]
+    out: Option<std::path::PathBuf>,
+}
 
-pub fn fidelity(_: &FidelityBenchArgs) -> anyhow::Result<()> {
+pub fn fidelity(args: &FidelityBenchArgs) -> anyhow::Result<()> {
+    if let Some(dir) = &args.out {
+        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+    }
     let body = BodyModel::default_body()?;
     let mut renderer = HeadlessRenderer::new(GpuContext::headless()?);
     let mut pipeline = Pipeline::default();
@@ -35,8 +45,28 @@ pub fn fidelity(_: &FidelityBenchArgs) -> anyhow::Result<()> {
         Subject::clothed(&body),
         Subject::haired(&body),
         Subject::clothed_and_haired(&body),
+        Subject::long_haired(&body),
     ] {
-        let rows = score(&mut renderer, &mut pipeline, &subject)?;
+        let mut written = Ok(());
+        let rows = score(
+            &mut renderer,
+            &mut pipeline,
+            &subject,
+            |view, truth, rendered| {
+                if let (Some(dir), Ok(())) = (&args.out, &written) {
+                    let name = format!("{} {view}", subject.name)
+                        .replace('−', "-")
+                        .replace(['°', '(', ')'], "")
+                        .replace(
+                            |c: char| !c.is_ascii_alphanumeric() && !"+-".contains(c),
+                            "_",
+                        );
+                    let name = format!("{}.png", name.trim_end_matches('_'));
+                    written = save_png(&side_by_side(truth, rendered), &dir.join(name));
+                }
+            },
+        )?;
+        written?;
         for ((view, ..), m) in VIEWS.iter().zip(rows) {
             println!(
                 "{:<20} {view:<16} {:>7.4} {:>7.2} {:>7.4} {:>7.4}",
