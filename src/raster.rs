@@ -49,6 +49,35 @@ pub fn rasterize(vertices: &[Vec3], triangles: &[[u32; 3]], camera: &Camera) -> 
         bary: vec![[0.0; 3]; n],
         depth: vec![f32::INFINITY; n],
     };
+    fragments(vertices, triangles, camera, |t, i, z, bary| {
+        if z < out.depth[i] {
+            out.depth[i] = z;
+            out.triangle[i] = t as i32;
+            out.bary[i] = bary;
+        }
+    });
+    out
+}
+
+/// View-space z of the farthest surface of `triangles` over `vertices` at each pixel `camera`
+/// sees (the back of what [`rasterize`] sees the front of); `f32::NEG_INFINITY` where none is.
+pub fn farthest(vertices: &[Vec3], triangles: &[[u32; 3]], camera: &Camera) -> Vec<f32> {
+    let mut depth = vec![f32::NEG_INFINITY; camera.width as usize * camera.height as usize];
+    fragments(vertices, triangles, camera, |_, i, z, _| {
+        depth[i] = depth[i].max(z);
+    });
+    depth
+}
+
+/// Calls `f(triangle, pixel, view z, perspective-correct barycentrics)` for every pixel centre
+/// each triangle in front of the camera covers.
+fn fragments(
+    vertices: &[Vec3],
+    triangles: &[[u32; 3]],
+    camera: &Camera,
+    mut f: impl FnMut(usize, usize, f32, [f32; 3]),
+) {
+    let (w, h) = (camera.width, camera.height);
     let projected: Vec<Vec3> = vertices.iter().map(|&v| camera.project(v)).collect();
     for (t, tri) in triangles.iter().enumerate() {
         let p = tri.map(|i| projected[i as usize]);
@@ -59,15 +88,14 @@ pub fn rasterize(vertices: &[Vec3], triangles: &[[u32; 3]], camera: &Camera) -> 
         let corners = p.map(|q| Vec2::new(q.x, q.y));
         cover(corners, w, h, |x, y, l| {
             let z = 1.0 / (l[0] * inv_z[0] + l[1] * inv_z[1] + l[2] * inv_z[2]);
-            let i = (y * w + x) as usize;
-            if z < out.depth[i] {
-                out.depth[i] = z;
-                out.triangle[i] = t as i32;
-                out.bary[i] = [0, 1, 2].map(|k| l[k] * inv_z[k] * z);
-            }
+            f(
+                t,
+                (y * w + x) as usize,
+                z,
+                [0, 1, 2].map(|k| l[k] * inv_z[k] * z),
+            );
         });
     }
-    out
 }
 
 /// Calls `f(x, y, barycentrics)` for every pixel of a `width × height` grid whose centre

@@ -37,6 +37,9 @@ use crate::photo::SourceImage;
 use crate::photo::distance::{connected_parts, nearest_seeds};
 use crate::raster::Fragments;
 
+use super::hair;
+use super::hanging::{self, Strand};
+
 /// The thickest an extra Gaussian stands along the view (standard deviation, metres).
 pub const MAX_DEPTH: f32 = 0.01;
 /// How deep hair stands along the view (standard deviation, metres): three of it reach from the
@@ -97,7 +100,9 @@ const ARM_CHAINS: [[&str; 3]; 2] = [
 /// Extra Gaussians for `photo`'s person pixels that `fragments` (the posed body's
 /// rasterization from `camera`, the photo's size) leaves uncovered; `vertices` are the posed
 /// body's (dressed, as rasterized) and `posed` its pose (for the skinning). Features: RGB and
-/// the mask value as source confidence.
+/// the mask value as source confidence. With hair standing `hair` metres off the head
+/// (`hair::thickness`), the hair hanging beside the neck also goes on behind it
+/// ([`hanging::curtain`]).
 pub fn extras(
     photo: &SourceImage,
     fragments: &Fragments,
@@ -105,6 +110,7 @@ pub fn extras(
     vertices: &[Vec3],
     posed: &PosedBody,
     camera: &Camera,
+    hair: f32,
 ) -> SkinnedGaussians {
     let mut out = SkinnedGaussians::default();
     let Some(mask) = &photo.mask else {
@@ -142,12 +148,7 @@ pub fn extras(
                 None => continue,
             },
         };
-        let hair = anchors
-            .within(point, HAIR_REACH)
-            .into_iter()
-            .filter(|&(_, k)| anchors.head[k as usize])
-            .map(|(d, _)| d)
-            .min_by(f32::total_cmp);
+        let hair = anchors.to_head(point);
         found.push(Uncovered {
             pixel: i,
             nearest: q,
@@ -190,14 +191,22 @@ pub fn extras(
         .zip(lags)
         .map(|((&i, &z), lag)| anchors.hair_joints(unproject(i, z), lag))
         .collect();
-    let mut hair = depths.into_iter().zip(window.mean_weights(&weights));
+    let mut smoothed = depths.into_iter().zip(window.mean_weights(&weights));
     let mut placed: Vec<(usize, Vec3, Skinning, bool, Extra)> = Vec::new();
+    let mut strands: Vec<Strand> = Vec::new();
     for u in found {
         let (i, z) = (u.pixel, u.depth);
         let m = mask[i];
+        let (rgb, _) = photo.pixel(i);
+        let features = rgb.map(|c| (c / m).min(1.0));
         let (point, skinning, along, z) = if is_hair(&u) {
-            let (depth, joints) = hair.next().expect("one per hair pixel");
+            let (depth, joints) = smoothed.next().expect("one per hair pixel");
             let point = unproject(i, depth);
+            strands.push(Strand {
+                pixel: i,
+                point,
+                rgb: features,
+            });
             match anchors.by_joints(point, &joints) {
                 Some(skinning) => (point, skinning, HAIR_DEPTH, depth),
                 None => continue,
@@ -210,8 +219,6 @@ pub fn extras(
         };
         let across = RADIUS_PX * camera.pixel_footprint(z);
         let along = along.clamp(across, MAX_DEPTH);
-        let (rgb, _) = photo.pixel(i);
-        let features = rgb.map(|c| (c / m).min(1.0));
         let gaussian = Extra {
             scale: [across, along, across],
             opacity: OPACITY * m.min(1.0),
@@ -245,7 +252,79 @@ pub fn extras(
         };
         push(&mut out, point, skinning, disc, &gaussian, vertices, posed);
     }
+    if hair > 0.0 {
+        hang_behind(&mut out, &strands, &anchors, camera, fragments, hair, posed);
+    }
     out
+}
+
+/// How far apart the discs of the hair behind the neck are (metres): it shows no detail of its
+/// own, one colour a height.
+const CURTAIN_SPACING: f32 = 0.004;
+
+/// Appends the hair hanging behind the neck ([`hanging::curtain`]) for the hair `strands` beside
+/// it, each disc skinned as hair there is and kept only where the photo's camera sees the body
+/// (`fragments`) or those strands in front of it, so the photo's view keeps what it shows.
+#[allow(clippy::too_many_arguments)]
+fn hang_behind(
+    out: &mut SkinnedGaussians,
+    strands: &[Strand],
+    anchors: &Anchors,
+    camera: &Camera,
+    fragments: &Fragments,
+    hair: f32,
+    posed: &PosedBody,
+) {
+    let Some(head) = anchors.body.joint_index("head") else {
+        return;
+    };
+    let joint: Vec3 = posed.joints[head].translation.into();
+    let below_skull = camera.project(joint - Vec3::Y * hair::SKULL_BELOW);
+    let depth = |p: Vec3| camera.view_from_world.transform_point3(p).z;
+    let size = camera.width as usize;
+    let discs = hanging::curtain(
+        strands,
+        size,
+        camera,
+        below_skull.y.max(0.0) as usize,
+        camera.project(joint).x,
+        || crate::raster::farthest(anchors.vertices, &anchors.body.triangles, camera),
+        hair,
+        CURTAIN_SPACING,
+    );
+    // What the photo's camera sees in front at each pixel: the body, or the discs beyond it.
+    let mut front: Vec<Option<f32>> = (0..size * size)
+        .map(|i| (fragments.triangle[i] >= 0).then_some(fragments.depth[i]))
+        .collect();
+    for s in strands {
+        let z = depth(s.point);
+        front[s.pixel] = Some(front[s.pixel].map_or(z, |f| f.min(z)));
+    }
+    let across = 0.6 * CURTAIN_SPACING;
+    for d in discs {
+        if !hair::hidden(camera, d.point, across, |i| front[i]) {
+            continue;
+        }
+        let to_head = anchors.to_head(d.point).unwrap_or(HAIR_HANGS_AT);
+        let joints = anchors.hair_joints(d.point, hair_lag(to_head));
+        let Some(skinning) = anchors.by_joints(d.point, &joints) else {
+            continue;
+        };
+        let extra = Extra {
+            scale: [across, HAIR_DEPTH, across],
+            opacity: OPACITY,
+            features: [d.rgb[0], d.rgb[1], d.rgb[2], 0.0],
+        };
+        push(
+            out,
+            d.point,
+            skinning,
+            facing(d.normal),
+            &extra,
+            anchors.vertices,
+            posed,
+        );
+    }
 }
 
 /// The share of hair's skinning moved to the upper torso's joint for hair `to_head` metres from
@@ -378,6 +457,16 @@ pub(super) struct Extra {
     pub(super) scale: [f32; 3],
     pub(super) opacity: f32,
     pub(super) features: [f32; 4],
+}
+
+/// The rotation of a disc facing along `normal`: its thin axis (the second) along it.
+pub(super) fn facing(normal: Vec3) -> [f32; 4] {
+    let tangent = normal.any_orthonormal_vector();
+    quat_from_matrix(Mat3A::from_cols(
+        tangent.into(),
+        normal.into(),
+        tangent.cross(normal).into(),
+    ))
 }
 
 /// Appends `extra` at `point` with `rotation` in the world, skinned by `(v, w)`; nothing where
@@ -611,6 +700,15 @@ impl<'a> Anchors<'a> {
             torso_from_world,
             arms,
         }
+    }
+
+    /// How far the head is from `point` (its nearest anchoring vertex), within [`HAIR_REACH`].
+    fn to_head(&self, point: Vec3) -> Option<f32> {
+        self.within(point, HAIR_REACH)
+            .into_iter()
+            .filter(|&(_, k)| self.head[k as usize])
+            .map(|(d, _)| d)
+            .min_by(f32::total_cmp)
     }
 
     /// Up to [`ANCHORS`] vertices near `point` and their weights (summing to 1): within

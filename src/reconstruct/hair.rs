@@ -10,11 +10,11 @@
 //! view. A bald head or a tight cap shows no hair around it and gets no shell. (Dressing the
 //! skull out by the same amount instead tore it at the ears: docs/reconstruction.md.)
 
-use glam::{Mat3A, Vec2, Vec3};
+use glam::{Vec2, Vec3};
 
-use super::extras::{Extra, PERSON, push};
+use super::extras::{Extra, PERSON, facing, push};
 use super::unseen_parts::FACE_BELOW;
-use crate::avatar::{SkinnedGaussians, quat_from_matrix};
+use crate::avatar::SkinnedGaussians;
 use crate::body::{BodyModel, PosedBody};
 use crate::camera::Camera;
 use crate::photo::Shown;
@@ -37,7 +37,7 @@ const OPACITY: f32 = 0.95;
 const BEHIND: f32 = 0.01;
 /// The skull: head vertices (rest) above this height below the head joint; lower are the jaw,
 /// the chin and the neck, which hair does not stand off.
-const SKULL_BELOW: f32 = 0.02;
+pub(super) const SKULL_BELOW: f32 = 0.02;
 
 /// How far hair stands off the head of `posed` seen by `camera` on `mask` (`camera.width`²,
 /// row-major; the photo where it is `shown`), in metres, at most [`MAX_HAIR`]: the median run of
@@ -151,7 +151,6 @@ pub fn shell(
         .inverse()
         .transform_point3(Vec3::ZERO);
     let view = (middle - eye).normalize_or_zero();
-    let size = camera.width as i32;
     let added = out.len();
     for v in head {
         let radial = (vertices[v] - middle).normalize_or_zero();
@@ -162,29 +161,13 @@ pub fn shell(
         let point = vertices[v] + radial * share * hair;
         let radius = vertices[v].distance(middle);
         let across = ACROSS * spacing[v] * (radius + share * hair) / radius.max(1e-3);
-        // Hidden from the photo's camera behind the body, the disc and two deviations round it.
-        let at = camera.project(point);
-        let reach = 2.0 * across / camera.pixel_footprint(at.z);
-        let hidden = [(0.0, 0.0), (1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
-            .iter()
-            .all(|&(dx, dy)| {
-                let p = (at.truncate() + Vec2::new(dx, dy) * reach)
-                    .floor()
-                    .as_ivec2();
-                let inside = p.x >= 0 && p.y >= 0 && p.x < size && p.y < size;
-                let i = (p.y * size + p.x) as usize;
-                inside && fragments.triangle[i] >= 0 && fragments.depth[i] + BEHIND < at.z
-            });
+        // Hidden from the photo's camera behind the body.
+        let hidden = hidden(camera, point, across, |i| {
+            (fragments.triangle[i] >= 0).then_some(fragments.depth[i])
+        });
         if !hidden {
             continue;
         }
-        // The disc faces out from the head: its thin axis (the second) along `radial`.
-        let tangent = radial.any_orthonormal_vector();
-        let rotation = quat_from_matrix(Mat3A::from_cols(
-            tangent.into(),
-            radial.into(),
-            tangent.cross(radial).into(),
-        ));
         let extra = Extra {
             scale: [across, ALONG, across],
             opacity: OPACITY,
@@ -194,13 +177,37 @@ pub fn shell(
             out,
             point,
             ([v as u32; 4], [1.0, 0.0, 0.0, 0.0]),
-            rotation,
+            // Facing out from the head.
+            facing(radial),
             &extra,
             vertices,
             posed,
         );
     }
     out.len() - added
+}
+
+/// Whether a disc at `point`, `across` wide, is hidden from `camera`: at its centre and two
+/// deviations either way across and down, `front` (per pixel, the depth of what the photo shows
+/// there; `None` for nothing) lies [`BEHIND`] or more in front of it.
+pub(super) fn hidden(
+    camera: &Camera,
+    point: Vec3,
+    across: f32,
+    front: impl Fn(usize) -> Option<f32>,
+) -> bool {
+    let at = camera.project(point);
+    let reach = 2.0 * across / camera.pixel_footprint(at.z);
+    let size = camera.width as i32;
+    [(0.0, 0.0), (1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
+        .iter()
+        .all(|&(dx, dy)| {
+            let p = (at.truncate() + Vec2::new(dx, dy) * reach)
+                .floor()
+                .as_ivec2();
+            let inside = p.x >= 0 && p.y >= 0 && p.x < size && p.y < size;
+            inside && front((p.y * size + p.x) as usize).is_some_and(|z| z + BEHIND < at.z)
+        })
 }
 
 fn head_vertices(body: &BodyModel) -> impl Iterator<Item = usize> + '_ {

@@ -17,6 +17,7 @@ pub mod extras;
 pub mod eyes;
 pub mod fill;
 pub mod hair;
+mod hanging;
 pub mod past_edge;
 pub mod texture;
 pub mod unseen_parts;
@@ -202,6 +203,9 @@ pub fn reconstruct_default(
     avatar.displacements = displacements;
 
     clock.start(Stage::Extras, progress)?;
+    if let Some(mask) = &photo.mask {
+        report.hair = hair::thickness(body, &posed, camera, mask, photo.shown);
+    }
     avatar.skinned = extras::extras(
         &past_edge::continued_below(&photo),
         &fragments,
@@ -209,10 +213,10 @@ pub fn reconstruct_default(
         &posed.vertices,
         &posed,
         camera,
+        report.hair,
     );
     // Hair's volume behind the head, in the crown's colour (the back of the head's).
-    if let (Some(mask), Some(crown)) = (&photo.mask, crown) {
-        report.hair = hair::thickness(body, &posed, camera, mask, photo.shown);
+    if let (Some(_), Some(crown)) = (&photo.mask, crown) {
         report.hair_shell = hair::shell(
             &mut avatar.skinned,
             body,
