@@ -4,7 +4,7 @@
 //! (`hair::shell`). Long hair hangs straight down from the back of the skull and then lies on
 //! the back, so each height at which the photo shows both strips gets a row of discs from one
 //! strip to the other, each column as far back as the hair behind the body there or above it,
-//! in that height's hair colour.
+//! in that height's hair colours.
 
 use glam::Vec3;
 
@@ -39,8 +39,8 @@ pub(super) struct Disc {
 /// for only where hair hangs) in it at that row or above, as hair hangs straight down from the
 /// back of the skull and then lies on the back; its discs `spacing` apart along the row.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn curtain(
-    hair: &[Strand],
+pub(super) fn curtain<'a>(
+    hair: &'a [Strand],
     size: usize,
     camera: &Camera,
     first_row: usize,
@@ -51,14 +51,13 @@ pub(super) fn curtain(
 ) -> Vec<Disc> {
     let view_from_world = camera.view_from_world;
     let world_from_view = view_from_world.inverse();
-    let mut rows: Vec<Vec<&Strand>> = vec![Vec::new(); size];
+    let mut rows: Vec<Vec<&'a Strand>> = vec![Vec::new(); size];
     for s in hair {
         rows[s.pixel / size].push(s);
     }
-    let sides = |row: &[&'_ Strand]| -> (Vec<usize>, Vec<usize>) {
-        row.iter()
-            .map(|s| s.pixel % size)
-            .partition(|&x| (x as f32 + 0.5) < middle)
+    let column = |s: &Strand| (s.pixel % size) as f32 + 0.5;
+    let sides = |row: &[&'a Strand]| -> (Vec<&'a Strand>, Vec<&'a Strand>) {
+        row.iter().partition(|s| column(s) < middle)
     };
     let hangs: Vec<bool> = rows
         .iter()
@@ -92,11 +91,12 @@ pub(super) fn curtain(
             continue;
         }
         last_height = Some(height);
+        // From one strip's middle to the other's, in colours going from one's to the other's.
         let (left, right) = sides(row);
         let centre =
-            |side: &[usize]| side.iter().map(|&x| x as f32 + 0.5).sum::<f32>() / side.len() as f32;
+            |side: &[&Strand]| side.iter().map(|s| column(s)).sum::<f32>() / side.len() as f32;
         let (from, to) = (centre(&left), centre(&right));
-        let rgb = median_colour(row);
+        let (left_rgb, right_rgb) = (median_colour(&left), median_colour(&right));
         // Along the row in quarter pixels, a disc each `spacing` of the draped surface.
         let at = |x: f32| {
             let d = drape[(x as usize).min(size - 1)];
@@ -120,12 +120,13 @@ pub(super) fn curtain(
                 let along = (ahead - behind).normalize_or(Vec3::X);
                 let outward = along.cross(Vec3::Y).normalize_or(Vec3::Z);
                 let outward = if outward.z < 0.0 { -outward } else { outward };
+                let t = ((x - from) / (to - from).max(1.0)).clamp(0.0, 1.0);
                 out.push(Disc {
                     point: world_from_view.transform_point3(p),
                     normal: world_from_view
                         .transform_vector3(outward)
                         .normalize_or(Vec3::Z),
-                    rgb,
+                    rgb: std::array::from_fn(|c| left_rgb[c] + (right_rgb[c] - left_rgb[c]) * t),
                 });
             }
             (previous, x) = (Some(p), x + 0.25);
@@ -161,7 +162,7 @@ fn depth_of(hair: &[Strand], camera: &Camera) -> f32 {
     sum / hair.len().max(1) as f32
 }
 
-/// The per-channel median colour of a row's hair.
+/// The per-channel median colour of a strip's hair.
 fn median_colour(row: &[&Strand]) -> [f32; 3] {
     std::array::from_fn(|c| {
         let mut v: Vec<f32> = row.iter().map(|s| s.rgb[c]).collect();
