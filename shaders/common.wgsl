@@ -30,6 +30,11 @@ struct Frame {
     num_gaussians: u32,
     pair_capacity: u32,
     channels: u32,
+    // LowPass (src/gaussians/mod.rs): 0 dilated as 3DGS, 1 compensated as Mip-Splatting.
+    low_pass: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct Gaussian {

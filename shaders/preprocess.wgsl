@@ -116,7 +116,17 @@ fn main(
         atomicAdd(&stats[STAT_OUTSIDE], 1u);
         return;
     }
-    let conic_opacity = vec4<f32>(conic, g.opacity);
+    // Compensated, the low-pass spreads the splat without adding to its mass (Mip-Splatting):
+    // opacity × √(det cov2 / det(cov2 + 0.3 I)). det cov2 is |r₀ × r₁|² for the rows r of
+    // J·W·R·S (Binet–Cauchy), a sum of squares: taken as a·c − b² it cancels to noise for
+    // needle-thin splats, where the square root magnifies it.
+    var opacity = g.opacity;
+    if frame.low_pass == 1u {
+        let p = jw * m;
+        let across = cross(vec3<f32>(p[0][0], p[1][0], p[2][0]), vec3<f32>(p[0][1], p[1][1], p[2][1]));
+        opacity *= sqrt(dot(across, across) / det);
+    }
+    let conic_opacity = vec4<f32>(conic, opacity);
     // The reference lists every tile of the 3σ rectangle; only those the splat can reach matter
     // (it still counts as visible when it reaches none, as in the reference).
     let q_limit = reach_limit(g.opacity);

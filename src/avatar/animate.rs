@@ -70,6 +70,7 @@ impl Rig {
             });
         }
         out.channels = avatar.channels;
+        out.low_pass = avatar.kind.low_pass();
         out.positions.clear();
         out.rotations.clear();
         out.scales.clear();

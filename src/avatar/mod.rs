@@ -39,6 +39,15 @@ pub enum AvatarKind {
 }
 
 impl AvatarKind {
+    /// How its Gaussians are low-passed when splatted: as GUAVA's rasterizer, which its decoders
+    /// were trained through, or compensated for the default reconstruction's discs.
+    pub fn low_pass(self) -> crate::gaussians::LowPass {
+        match self {
+            Self::DefaultReconstruction => crate::gaussians::LowPass::Compensated,
+            Self::Guava => crate::gaussians::LowPass::Dilated,
+        }
+    }
+
     pub fn label(self) -> &'static str {
         match self {
             Self::DefaultReconstruction => "default reconstruction (not the learned GUAVA model)",

@@ -40,6 +40,21 @@ pub fn read_file(path: &Path) -> Result<GaussianCloud, CloudFileError> {
     }
 }
 
+/// How a splat's opacity meets the splatting pass's screen-space low-pass (0.3 px² added to every
+/// projected covariance, as 3DGS's rasterizer does).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LowPass {
+    /// As 3DGS and GUAVA's rasterizer: the filter widens a splat at its full opacity, which
+    /// clouds optimised through that rasterizer (3DGS scenes, GUAVA's decoders) expect.
+    #[default]
+    Dilated,
+    /// Mip-Splatting's 2D filter (gsplat's "antialiased" mode): the opacity is scaled by
+    /// √(det Σ / det(Σ + 0.3 I)), so the filter spreads a splat without adding to its mass. For
+    /// the default reconstruction, whose discs are placed to cover their own pixels: dilated, a
+    /// subject's outline drew 0.75–1 px wider than its photo's on every side.
+    Compensated,
+}
+
 /// Gaussian-major storage; `features[i * channels + c]` is channel `c` of Gaussian `i`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct GaussianCloud {
@@ -53,6 +68,8 @@ pub struct GaussianCloud {
     /// In [0, 1] (sigmoid already applied).
     pub opacities: Vec<f32>,
     pub features: Vec<f32>,
+    /// How the splatting pass low-passes these splats.
+    pub low_pass: LowPass,
 }
 
 /// Fewest and most feature channels the splatting pass supports.

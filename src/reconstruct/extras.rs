@@ -47,10 +47,12 @@ pub const MAX_DEPTH: f32 = 0.01;
 pub const HAIR_DEPTH: f32 = 0.002;
 /// Half the side of the window hair's depth and skinning are averaged over (pixels of the source).
 const SMOOTHING: usize = 16;
-/// Standard deviation of a disc across the view, in pixels of the source: a neighbour's disc
-/// drawn over a pixel adds 8 % of its colour there (at 0.6, 24 %, which blurred the hair's
-/// strands in the source view once neighbours stood at different depths).
-const RADIUS_PX: f32 = 0.45;
+/// Standard deviation of a disc across the view, in pixels of the source, before the splatting
+/// pass's low-pass (compensated for default-mode avatars, `gaussians::LowPass`): at 0.45, which
+/// the dilating low-pass needed (at 0.6 neighbours' discs blurred the hair's strands), the
+/// compensated one left the hair see-through (the clip's reference frame 29.25 → 27.74 dB); 0.6
+/// covers it again (29.28), 0.7 and 0.85 blur it (29.23, 28.78).
+const RADIUS_PX: f32 = 0.6;
 /// Extra Gaussians are opaque where the mask is sure, as the body's discs are.
 const OPACITY: f32 = 0.95;
 /// A pixel belongs to the person at this mask value.

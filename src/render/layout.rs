@@ -16,8 +16,13 @@ pub struct FrameUniform {
     pub num_gaussians: u32,
     pub pair_capacity: u32,
     pub channels: u32,
+    /// [`crate::gaussians::LowPass`]: 0 dilated, 1 compensated.
+    pub low_pass: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
-const _: () = assert!(size_of::<FrameUniform>() == 128);
+const _: () = assert!(size_of::<FrameUniform>() == 144);
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]

@@ -17,6 +17,7 @@
 use super::{RenderStats, SplatImage, TILE_SIZE};
 use crate::camera::Camera;
 use crate::gaussians::GaussianCloud;
+use crate::gaussians::LowPass;
 use glam::{DMat3, DVec3, DVec4};
 
 pub const ALPHA_MIN: f64 = 1.0 / 255.0;
@@ -112,6 +113,15 @@ pub fn project(cloud: &GaussianCloud, i: usize, camera: &Camera) -> Result<Splat
     if det == 0.0 || !det.is_finite() {
         return Err(Culled::Degenerate);
     }
+    // Mip-Splatting's 2D filter: det cov2 = |r₀ × r₁|² for the rows of J·W·R·S.
+    let opacity = match cloud.low_pass {
+        LowPass::Dilated => opacity,
+        LowPass::Compensated => {
+            let p = jw * rot * DMat3::from_diagonal(DVec3::from(cloud.scales[i].map(f64::from)));
+            let across = p.row(0).cross(p.row(1));
+            opacity * (across.length_squared() / det).sqrt()
+        }
+    };
     let conic = [c / det, -b / det, a / det];
     let mid = 0.5 * (a + c);
     let disc = (mid * mid - det).max(0.1).sqrt();

@@ -28,6 +28,7 @@ pub struct GpuAvatar {
     show_outside: bool,
     triangle_count: u32,
     channels: u32,
+    low_pass: crate::gaussians::LowPass,
     body: (String, usize, usize),
     /// Template, skinned then UV features, Gaussian-major: written into the splatter once per
     /// reallocation of its buffers (they live there, where the rasterizer reads them).
@@ -139,6 +140,7 @@ impl GpuAvatar {
             show_outside: false,
             triangle_count: params.triangle_count,
             channels: avatar.channels as u32,
+            low_pass: avatar.kind.low_pass(),
             body: (
                 avatar.body.clone(),
                 avatar.body_vertices,
@@ -263,6 +265,7 @@ impl GpuAvatar {
     ) -> Result<(), SplatError> {
         let count = self.len();
         splatter.reserve(device, queue, count, self.channels)?;
+        splatter.set_low_pass(self.low_pass);
         let generation = (splatter.buffers_generation(), count);
         if self.bound.as_ref().is_some_and(|(g, _)| *g == generation) {
             return Ok(());

@@ -208,7 +208,11 @@ mod tests {
                     near,
                     num_gaussians,
                     pair_capacity,
-                    channels
+                    channels,
+                    low_pass,
+                    _pad0,
+                    _pad1,
+                    _pad2
                 )
             )
         );

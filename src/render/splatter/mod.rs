@@ -16,6 +16,7 @@ use super::timing::StageTimer;
 use super::{RenderStats, SplatError, SplatImage};
 use crate::camera::Camera;
 use crate::gaussians::GaussianCloud;
+use crate::gaussians::LowPass;
 use buffers::{Bindings, CloudBuffers, ViewBuffers, storage};
 use std::sync::Arc;
 
@@ -72,6 +73,8 @@ pub struct Splatter {
     buffers_generation: u64,
     camera: Option<Camera>,
     max_pairs: u32,
+    /// How what it holds is low-passed: the uploaded cloud's, or the attached avatar's.
+    low_pass: LowPass,
 }
 
 /// Floats per Gaussian in the GPU feature buffer: the channels padded to a multiple of four, which
@@ -192,6 +195,7 @@ impl Splatter {
             buffers_generation: 0,
             camera: None,
             max_pairs: (max_bytes / 4).min(u32::MAX as u64) as u32,
+            low_pass: LowPass::default(),
         }
     }
 
@@ -226,7 +230,13 @@ impl Splatter {
             .collect();
         queue.write_buffer(&buffers.gaussians, 0, bytemuck::cast_slice(&gpu));
         self.write_features(queue, &cloud.features);
+        self.low_pass = cloud.low_pass;
         Ok(())
+    }
+
+    /// How the Gaussians written by something else (the rig pass) are low-passed.
+    pub fn set_low_pass(&mut self, low_pass: LowPass) {
+        self.low_pass = low_pass;
     }
 
     /// Makes room for `count` Gaussians of `channels` channels, whose attributes something else
@@ -377,6 +387,13 @@ impl Splatter {
             num_gaussians: self.num_gaussians,
             pair_capacity: view.pair_capacity,
             channels,
+            low_pass: match self.low_pass {
+                LowPass::Dilated => 0,
+                LowPass::Compensated => 1,
+            },
+            _pad0: 0,
+            _pad1: 0,
+            _pad2: 0,
         };
         queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
         // Four to a word like the features, zero past the channels.
