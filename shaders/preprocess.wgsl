@@ -129,7 +129,7 @@ fn main(
     let conic_opacity = vec4<f32>(conic, opacity);
     // The reference lists every tile of the 3σ rectangle; only those the splat can reach matter
     // (it still counts as visible when it reaches none, as in the reference).
-    let q_limit = reach_limit(g.opacity);
+    let q_limit = reach_limit(opacity);
     var area = 0u;
     for (var ty = rmin.y; ty < rmax.y; ty++) {
         let span = row_span(xy, conic_opacity, q_limit, ty, rmin.x, rmax.x);

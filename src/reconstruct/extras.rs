@@ -940,7 +940,7 @@ mod tests {
     /// Hair's skinning is continuous across the hair: walking down columns beside the jaw and
     /// the neck (where the clip's hair lies) in steps of 0.1 mm, each point skinned as hair is
     /// and moved by a pose that turns the spine, the neck and the head, a step grows to at most
-    /// 10× (stretching is smooth; a tear is a jump of millimetres). Measured 4.8×; before, with
+    /// 10× (stretching is smooth; a tear is a jump of millimetres). Measured 4.5×; before, with
     /// each joint carried by the vertex nearest the point and the heaviest four joints cut off,
     /// 67× (6.7 mm between points 0.1 mm apart): the clip's hair showed black cracks across it
     /// with her head turned.
