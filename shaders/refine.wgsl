@@ -17,8 +17,8 @@ struct Op {
     stride_w: u32,
     pad_top: u32,
     pad_left: u32,
-    // What the pass does on top (UNARY_* or, for a convolution, a fused ReLU) and, for
-    // copies, the first channel read and written.
+    // What the pass does on top (UNARY_* or, for a convolution, a fused ReLU; for to_rgba, how
+    // far it reaches past the splat) and, for copies, the first channel read and written.
     kind: u32,
     src_channel: u32,
     dst_channel: u32,
@@ -194,7 +194,9 @@ fn gather(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 // A four-channel output ([4, in_h, in_w]: premultiplied RGB and alpha) as one RGBA texel per
-// pixel of the image (out_h × out_w, its top-left corner), for a view to present.
+// pixel of the image (out_h × out_w, its top-left corner), for a view to present; held within
+// the splat's alpha (`aux` layer 0) dilated by `op.kind` pixels, as `hold_within_splat` in
+// src/refine/mod.rs holds the CPU's.
 @group(0) @binding(8) var rgba: texture_storage_2d_array<rgba32float, write>;
 
 @compute @workgroup_size(8, 8, 1)
@@ -204,6 +206,19 @@ fn to_rgba(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let plane = op.in_h * op.in_w;
     let i = id.y * op.in_w + id.x;
-    let v = vec4<f32>(src[i], src[plane + i], src[2u * plane + i], src[3u * plane + i]);
+    var v = vec4<f32>(src[i], src[plane + i], src[2u * plane + i], src[3u * plane + i]);
+    let r = i32(op.kind);
+    let p = vec2<i32>(id.xy);
+    let low = max(p - vec2<i32>(r), vec2<i32>(0));
+    let high = min(p + vec2<i32>(r), vec2<i32>(i32(op.out_w), i32(op.out_h)) - 1);
+    var reach = 0.0;
+    for (var y = low.y; y <= high.y; y++) {
+        for (var x = low.x; x <= high.x; x++) {
+            reach = max(reach, textureLoad(aux, vec2<i32>(x, y), 0, 0).x);
+        }
+    }
+    if v.a > reach {
+        v = vec4<f32>(v.rgb * (reach / v.a), reach);
+    }
     textureStore(rgba, vec2<u32>(id.x, id.y), 0u, v);
 }

@@ -158,7 +158,7 @@ impl Pipelines {
                     Binding::Skip,
                     Binding::Skip,
                     Binding::Skip,
-                    Binding::Skip,
+                    InputTexture,
                     Binding::Skip,
                     Binding::OutputTexture(wgpu::TextureFormat::Rgba32Float),
                 ],
@@ -361,10 +361,12 @@ impl WgslNetwork {
 
     /// Records the copy of a four-channel output (the default refiner's premultiplied RGB and
     /// alpha, [4, padded H, padded W]) into `target`, an rgba32float 2D array of the image's
-    /// size: what a view presents.
+    /// size: what a view presents. It is held within the splat's alpha (`aux`'s layer 0) as
+    /// [`super::hold_within_splat`] holds it.
     pub fn encode_rgba(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        aux: &wgpu::Texture,
         target: &wgpu::Texture,
     ) -> Result<(), String> {
         let plan = self.plan.as_ref().ok_or("nothing was run")?;
@@ -385,10 +387,12 @@ impl WgslNetwork {
             out_c: 4,
             out_h: size.height,
             out_w: size.width,
+            kind: super::REACH_PX as u32,
             ..Default::default()
         };
         let uniform = uniform(device, &params);
         let view = crate::render::splatter::array_view(target);
+        let aux = crate::render::splatter::array_view(aux);
         let (pipeline, layout) = &self.pipelines.rgba;
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("refine::rgba"),
@@ -396,6 +400,7 @@ impl WgslNetwork {
             entries: &[
                 entry(0, uniform.as_entire_binding()),
                 entry(1, plan.buffers[self.output].as_entire_binding()),
+                entry(6, wgpu::BindingResource::TextureView(&aux)),
                 entry(8, wgpu::BindingResource::TextureView(&view)),
             ],
         });
