@@ -733,7 +733,9 @@ fn report_quick_writes_every_file_with_finite_numbers() {
         "the note names them"
     );
     // Savings: the refiner's row is measured on both sides (it wrote a literal 0 for "with"),
-    // and the idle frames, which cannot be timed, are not given a time.
+    // and the idle frames, which cannot be timed, are not given a time. Which side is slower is
+    // the benchmark's to say: beside the other tests running at once, drawing alone once took
+    // longer (175.5 ms) than drawing and refining (152.0).
     let savings = read("savings.csv");
     let cells = |start: &str| -> Vec<String> {
         let row = savings.lines().find(|l| l.starts_with(start)).expect(start);
@@ -748,7 +750,7 @@ fn report_quick_writes_every_file_with_finite_numbers() {
         .iter()
         .map(|c| c.parse().expect("a time"))
         .collect();
-    assert!(refiner[0] > 0.0 && refiner[1] > refiner[0], "{refiner:?}");
+    assert!(refiner.iter().all(|&ms| ms > 0.0), "{refiner:?}");
     assert_eq!(cells("frames when nothing changed"), ["", ""]);
     for row in &rows {
         for (name, cell) in header.iter().zip(row) {
