@@ -141,8 +141,9 @@ enum Command {
         out: PathBuf,
     },
     /// How faithful an avatar is to its photo: the avatar re-rendered from the photo's camera
-    /// against the photo × person mask. Prints `iou=… psnr=… ssim=… l1=…` (silhouette IoU; PSNR,
-    /// SSIM and mean absolute error of RGB over the person's box). With --video: self-reenactment.
+    /// against the photo × person mask. Prints `iou=… psnr=… ssim=… l1=… outline=…` (silhouette
+    /// IoU; PSNR, SSIM and mean absolute error of RGB over the person's box; the share of its
+    /// squared error where only one silhouette is). With --video: self-reenactment.
     Eval {
         /// The avatar (with --video: made here from the reference frame when not given).
         #[arg(long, required_unless_present = "video")]

@@ -481,7 +481,7 @@ impl Eval<'_> {
         let file = self
             .tracking
             .map_or_else(|| format!("{name} (tracked)"), |p| p.display().to_string());
-        let (mut sums, mut compared, mut written) = ([0.0f64; 5], 0usize, Vec::new());
+        let (mut sums, mut compared, mut written) = ([0.0f64; 6], 0usize, Vec::new());
         while let Some(frame) = frames.next_frame() {
             let frame = frame?;
             let i = frame.index;
@@ -533,7 +533,10 @@ impl Eval<'_> {
                 written.push(path);
             }
             if !is_reference {
-                for (s, v) in sums.iter_mut().zip([m.iou, m.psnr, m.ssim, m.l1, d]) {
+                for (s, v) in sums
+                    .iter_mut()
+                    .zip([m.iou, m.psnr, m.ssim, m.l1, m.outline, d])
+                {
                     *s += v;
                 }
                 compared += 1;
@@ -544,7 +547,7 @@ impl Eval<'_> {
         }
         let n = compared.max(1) as f64;
         println!(
-            "mean over {compared} frames{}: iou={:.4} psnr={:.2} ssim={:.4} l1={:.4}{}",
+            "mean over {compared} frames{}: iou={:.4} psnr={:.2} ssim={:.4} l1={:.4} outline={:.2}{}",
             if reference.is_some() {
                 " (the reference frame left out)"
             } else {
@@ -554,7 +557,8 @@ impl Eval<'_> {
             sums[1] / n,
             sums[2] / n,
             sums[3] / n,
-            lpips_text(sums[4] / n)
+            sums[4] / n,
+            lpips_text(sums[5] / n)
         );
         if let (Some(dir), false) = (self.out, written.is_empty()) {
             let mp4 = dir.join("compare.mp4");
