@@ -279,6 +279,27 @@ fn the_demo_portrait_fits_and_reconstructs() {
     assert_eq!(report.mask, MaskSource::Segmentation);
     assert!(report.observed > 20_000, "{report:?}");
     avatar.validate().expect("finite avatar");
+    // The photo shows no leg, and the avatar draws none below its bottom edge: they hung there
+    // as sticks in the colours at the edge (the body's margin past the edge is the torso's, for
+    // turned views).
+    let leg = |v: u32| {
+        let joint = body.joints[body.dominant_joint(v as usize)].name.as_str();
+        ["upperleg", "lowerleg", "foot"]
+            .iter()
+            .any(|j| joint.starts_with(j))
+    };
+    let below = |v: u32| {
+        view.camera.project(posed.vertices[v as usize]).y > guava::photo::SOURCE_SIZE as f32
+    };
+    let hanging = avatar.uv.triangles[..avatar.shown_uv(false)]
+        .iter()
+        .filter(|&&t| {
+            body.triangles[t as usize]
+                .iter()
+                .all(|&v| leg(v) && below(v))
+        })
+        .count();
+    assert_eq!(hanging, 0, "UV Gaussians drawn on the legs below the photo");
     // The shipped tracking (guava fit wrote it) fits the photo as well as this fit does. Camera
     // depth is not what is compared: 2D points leave a flat valley that trades camera distance
     // against body height, and the last bits of a machine's maths move the fit along it (12.51 to

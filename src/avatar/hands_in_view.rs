@@ -22,11 +22,14 @@ pub const SEEN_MARGIN: f32 = 0.25;
 /// Whether `camera` sees `point` within `bounds` (left, top, right, bottom, in its pixels) or
 /// within [`SEEN_MARGIN`] of them.
 pub fn seen_near(camera: &Camera, bounds: [f32; 4], point: Vec3) -> bool {
+    seen_within(camera, bounds, SEEN_MARGIN, point)
+}
+
+/// Whether `camera` sees `point` within `bounds` or within `margin` (a share of the camera's
+/// side) of them.
+pub fn seen_within(camera: &Camera, bounds: [f32; 4], margin: f32, point: Vec3) -> bool {
     let [left, top, right, bottom] = bounds;
-    let (mx, my) = (
-        SEEN_MARGIN * camera.width as f32,
-        SEEN_MARGIN * camera.height as f32,
-    );
+    let (mx, my) = (margin * camera.width as f32, margin * camera.height as f32);
     let p = camera.project(point);
     p.z > 0.0 && (left - mx..right + mx).contains(&p.x) && (top - my..bottom + my).contains(&p.y)
 }

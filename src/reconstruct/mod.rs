@@ -26,7 +26,7 @@ pub mod uv_map;
 use std::collections::BTreeMap;
 use std::time::Duration;
 
-use crate::avatar::{Avatar, seen_near};
+use crate::avatar::{Avatar, SEEN_MARGIN, seen_within};
 use crate::body::{BodyModel, BodyPose, PoseError, PosedBody, TargetGroup};
 use crate::photo::{PhotoError, Shown, SourceImage};
 use crate::progress::{Cancelled, Stage, StageClock};
@@ -233,15 +233,21 @@ pub fn reconstruct_default(
     Ok((avatar, report))
 }
 
+/// The joints whose vertices are a leg's (their names' beginnings).
+const LEG_JOINTS: [&str; 3] = ["upperleg", "lowerleg", "foot"];
+
 /// The grey that parts of the body the photo did not show are drawn in, when they are.
 pub const NEUTRAL_FILL: f32 = 0.5;
 
 /// Leaves out of `avatar` what its photo did not show: the UV Gaussians on triangles none of
 /// whose corners (posed at `vertices`) `camera` sees inside the photo or near its edge
-/// ([`seen_near`]) move, greyed, to the end of the UV set (the avatar's `outside` block, drawn
+/// ([`crate::avatar::seen_near`]) move, greyed, to the end of the UV set (the avatar's `outside` block, drawn
 /// only on request), and the template Gaussians on such vertices go transparent. The hands
 /// stay, in the colour their part was given: a hand raised into the photo's view is drawn
-/// there ([`crate::avatar::HandsInView`]). Returns how many UV Gaussians were left out.
+/// there ([`crate::avatar::HandsInView`]). The legs are kept only inside the photo, not near
+/// its edge: below an upper-body photo they hung as sticks in the colours at its bottom edge
+/// (the torso's margin is for turned views, which see the body go on past the edge). Returns
+/// how many UV Gaussians were left out.
 fn leave_out(
     avatar: &mut Avatar,
     body: &BodyModel,
@@ -254,7 +260,13 @@ fn leave_out(
         .iter()
         .enumerate()
         .map(|(i, &v)| {
-            body.part_of(i).is_some_and(|p| p.starts_with("hand.")) || seen_near(camera, bounds, v)
+            let joint = body.joints[body.dominant_joint(i)].name.as_str();
+            let margin = match LEG_JOINTS.iter().any(|j| joint.starts_with(j)) {
+                true => 0.0,
+                false => SEEN_MARGIN,
+            };
+            body.part_of(i).is_some_and(|p| p.starts_with("hand."))
+                || seen_within(camera, bounds, margin, v)
         })
         .collect();
     let outside: Vec<bool> = avatar
