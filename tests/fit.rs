@@ -284,7 +284,7 @@ fn the_demo_portrait_fits_and_reconstructs() {
     // turned views).
     let leg = |v: u32| {
         let joint = body.joints[body.dominant_joint(v as usize)].name.as_str();
-        ["upperleg", "lowerleg", "foot"]
+        guava::reconstruct::LEG_JOINTS
             .iter()
             .any(|j| joint.starts_with(j))
     };

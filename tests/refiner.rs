@@ -1,8 +1,8 @@
 //! The default refiner (assets/refiner/default_refiner.onnx) through ONNX Runtime: on held-out
 //! pairs (subjects, views and poses it was not trained on) the refined image is closer to the
-//! truth than the raw splat image, and reaches no further than a pixel past it; a model with the wrong inputs and an image without the
-//! confidence channel are clear errors. Through our own WGSL passes it gives ONNX Runtime's
-//! output; where each model runs.
+//! truth than the raw splat image, and reaches no further than a pixel past it; a model with the
+//! wrong inputs and an image without the confidence channel are clear errors. Through our own
+//! WGSL passes it gives ONNX Runtime's output; where each model runs.
 
 use std::path::Path;
 

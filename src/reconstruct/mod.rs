@@ -233,16 +233,16 @@ pub fn reconstruct_default(
     Ok((avatar, report))
 }
 
-/// The joints whose vertices are a leg's (their names' beginnings).
-const LEG_JOINTS: [&str; 3] = ["upperleg", "lowerleg", "foot"];
+/// The joints whose vertices are a leg's (their names' beginnings): kept only inside the photo.
+pub const LEG_JOINTS: [&str; 3] = ["upperleg", "lowerleg", "foot"];
 
 /// The grey that parts of the body the photo did not show are drawn in, when they are.
 pub const NEUTRAL_FILL: f32 = 0.5;
 
 /// Leaves out of `avatar` what its photo did not show: the UV Gaussians on triangles none of
-/// whose corners (posed at `vertices`) `camera` sees inside the photo or near its edge
-/// ([`crate::avatar::seen_near`]) move, greyed, to the end of the UV set (the avatar's `outside` block, drawn
-/// only on request), and the template Gaussians on such vertices go transparent. The hands
+/// whose corners (posed at `vertices`) `camera` sees inside the photo or within [`SEEN_MARGIN`]
+/// of its edge ([`seen_within`]) move, greyed, to the end of the UV set (the avatar's `outside`
+/// block, drawn only on request), and the template Gaussians on such vertices go transparent. The hands
 /// stay, in the colour their part was given: a hand raised into the photo's view is drawn
 /// there ([`crate::avatar::HandsInView`]). The legs are kept only inside the photo, not near
 /// its edge: below an upper-body photo they hung as sticks in the colours at its bottom edge
@@ -261,10 +261,8 @@ fn leave_out(
         .enumerate()
         .map(|(i, &v)| {
             let joint = body.joints[body.dominant_joint(i)].name.as_str();
-            let margin = match LEG_JOINTS.iter().any(|j| joint.starts_with(j)) {
-                true => 0.0,
-                false => SEEN_MARGIN,
-            };
+            let leg = LEG_JOINTS.iter().any(|j| joint.starts_with(j));
+            let margin = if leg { 0.0 } else { SEEN_MARGIN };
             body.part_of(i).is_some_and(|p| p.starts_with("hand."))
                 || seen_within(camera, bounds, margin, v)
         })
