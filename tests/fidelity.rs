@@ -117,6 +117,7 @@ fn the_silhouette_stage_recovers_a_known_shape_and_pose() {
         hands: None,
         body_from_face: None,
         unseen_arms: Vec::new(),
+        legs_at_rest: false,
         gaze: None,
     };
     let mut start_camera = camera;

@@ -223,8 +223,9 @@ fn the_demo_portrait_fits_and_reconstructs() {
         fit.keypoints_used, fit.rms_px, report.observed, report.texels
     );
     // MediaPipe puts her shoulders on the suit's neck ring and her hips on its chest, which an
-    // upright body of one shape cannot meet: 11.7 px measured (4.7 px when the fit was free to
-    // lay the torso back, which it did, 65°).
+    // upright body of one shape cannot meet: 11.7 px measured over all 11 points (4.7 px when
+    // the fit was free to lay the torso back, which it did, 65°), 5.8 px without the lower
+    // body's now that her legs rest (below).
     assert!(fit.keypoints_used >= 9 && fit.rms_px < 14.0, "{fit:?}");
     // Her face: all 103 points used, explained to a few pixels of a 63 px eye span (2.3 px
     // measured), and what anyone sees in the photo: a broad smile, both eyes open.
@@ -309,6 +310,16 @@ fn the_demo_portrait_fits_and_reconstructs() {
         guava::tracking::Tracking::load(&data("assets/demo_portrait.json")).expect("shipped");
     let shipped = guava::tracking::SourceView::from_tracking(&shipped, &body, "shipped")
         .expect("a view of the default body");
+    // The photo shows no knee (the pose model guesses her right one on her forearm, at 0.65),
+    // so her legs rest, in this fit and in the shipped tracking: meeting the guess, the fit
+    // lifted that thigh 57° toward the camera, a kick seen from the side.
+    assert!(fit.legs_at_rest, "{fit:?}");
+    for (v, what) in [(&view, "fit"), (&shipped, "shipped tracking")] {
+        for thigh in ["upperleg01.L", "upperleg01.R"] {
+            let turn = v.pose.rotations[body.joint_index(thigh).expect("thigh")].length();
+            assert!(turn < 1e-6, "the {what} turns {thigh} by {turn} rad");
+        }
+    }
     let keypoint_rms = |v: &guava::tracking::SourceView| {
         let mut posed = PosedBody::default();
         body.pose(&v.pose, &mut posed).expect("pose");
@@ -317,6 +328,12 @@ fn the_demo_portrait_fits_and_reconstructs() {
             .keypoints
             .iter()
             .filter(|k| k.confidence >= guava::fit::MIN_CONFIDENCE)
+            // Her legs rest: what the lower body's points ask is left unexplained by both.
+            .filter(|k| {
+                !["_hip", "_knee", "_ankle"]
+                    .iter()
+                    .any(|e| k.name.ends_with(e))
+            })
             .map(|k| {
                 let l = body.landmarks.iter().position(|l| l.name == k.name);
                 let q = v.camera.project(marks[l.expect("a body landmark")]);

@@ -12,7 +12,8 @@ use crate::keypoints::Side;
 pub struct FitReport {
     pub keypoints_used: usize,
     pub iterations: usize,
-    /// Root-mean-square reprojection error of the used body keypoints, in pixels.
+    /// Root-mean-square reprojection error of the used body keypoints, in pixels (without the
+    /// lower body's when the legs rest, [`Self::legs_at_rest`]).
     pub rms_px: f32,
     /// Each used body keypoint as the model found it, and where the fitted body puts it (source
     /// pixels).
@@ -33,6 +34,9 @@ pub struct FitReport {
     /// The arms whose elbow and wrist the keypoint models did not see ("left", "right": the
     /// person's): they rest along the body.
     pub unseen_arms: Vec<&'static str>,
+    /// No knee was seen confidently: the legs rest, and the lower body's points (which steer
+    /// the torso) are left out of the RMS.
+    pub legs_at_rest: bool,
     /// The gaze stage, when the face stage ran, the iris model found irises and the body has
     /// eye joints and eyeballs with an iris part ([`super::pupil`]).
     pub gaze: Option<GazeFitReport>,

@@ -165,6 +165,9 @@ impl Report {
         for side in &f.unseen_arms {
             s.push_str(&format!(", {side} arm unseen (rests along the body)"));
         }
+        if f.legs_at_rest {
+            s.push_str(", legs at rest (no knee seen)");
+        }
         s
     }
 
@@ -255,6 +258,13 @@ pub fn fit_lines(f: &FitReport) -> Vec<String> {
             "head and shoulders only ({why}): the head's points from the face mesh, the \
              shoulders' from the person mask"
         ));
+    }
+    if f.legs_at_rest {
+        lines.push(
+            "legs at rest: no knee seen confidently (the lower body's points steer the torso and \
+             are left out of the RMS)"
+                .into(),
+        );
     }
     if !f.unseen_arms.is_empty() {
         lines.push(format!(
