@@ -397,10 +397,13 @@ fn the_exported_avatar_animates_in_the_file_as_in_the_viewer() {
     // splats that sit on the bare body (the median: 9e-8 m); those on the clothing layer move
     // along the posed normals in the project's rig, which glTF cannot express, and UV
     // Gaussians turn with their triangle, and hair hanging from the chest's joint is carried by
-    // a chest vertex: measured 99th percentile 14.8 mm, worst 8 cm (a few
-    // at the armpits, where the layer stands 6 cm off a bending surface).
+    // a chest vertex: measured 99th percentile 10.3 mm, worst 6.4 cm (a few at the armpits,
+    // where the layer stands 6 cm off a bending surface), with the demo motion replacing the
+    // photo's pose; layered on it, the photo's head turn stays and the motion's adds to it, far
+    // from the bind pose (rest): 19.0 mm at the head's turn (5.3–6.0 s), 12.5 mm at the
+    // photo's pose itself (0 s).
     assert!(worst_mesh < 1e-5, "the mesh is {worst_mesh} m off");
-    assert!(spread[0] < 1e-5 && spread[1] < 0.015, "{spread:?}");
+    assert!(spread[0] < 1e-5 && spread[1] < 0.02, "{spread:?}");
 
     // The splats at the bind pose are the avatar's as the project rigs it there.
     body.pose(&bind_pose(&avatar, &body), &mut posed)

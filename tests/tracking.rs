@@ -310,13 +310,16 @@ fn demo_motion_moves_the_default_body() {
     );
     let retarget = Retarget::new(&demo, &model);
     assert_eq!(retarget.report.lines(), Vec::<String>::new());
-    let mut pose = BodyPose::rest(&model);
+    // Layered on the rest pose, from a fresh copy each frame.
+    let rest = BodyPose::rest(&model);
+    let mut pose = rest.clone();
     let mut posed = PosedBody::default();
     let coefficient =
         |pose: &BodyPose, name: &str| pose.coefficients[model.target_index(name).expect("present")];
     let (mut jaw_changes, mut last_jaw, mut max_blink, mut max_smile) = (0, 0.0, 0.0f32, 0.0f32);
     let (mut max_turn, mut wrist_above_head) = (0.0f32, false);
     for f in 0..demo.frames.len() {
+        pose.clone_from(&rest);
         retarget.sample(&demo, f as f64 / demo.fps as f64, &mut pose);
         model.pose(&pose, &mut posed).expect("pose");
         assert_eq!(posed.nonfinite_inputs, 0);
@@ -360,6 +363,75 @@ fn demo_motion_moves_the_default_body() {
                 .all(|v| v.abs() < 1e-3)
         );
     }
+}
+
+/// The demo motion is layered on the pose it drives: its first frame leaves a photo's pose as it
+/// was (a turned head, a laugh), and later frames turn the joints on from there and add to the
+/// photo's expression up to a unit's top. It replaced them, so every avatar the viewer opened
+/// snapped to the rest pose and a neutral face the moment it moved: Grace Hopper's torso turned
+/// away, a laughing photo's teeth showed on closed lips. [`Retarget::restore`] gives a pose kept
+/// between samples (the viewer's) its base back.
+#[test]
+fn the_demo_motion_moves_an_avatar_on_from_its_photos_pose() {
+    let model = BodyModel::default_body().expect("default body");
+    let demo = Tracking::load(Path::new(DEMO)).expect("demo motion");
+    assert!(demo.layered);
+    let retarget = Retarget::new(&demo, &model);
+    let joint = |name: &str| model.joint_index(name).expect("joint");
+    let unit = |name: &str| model.target_index(name).expect("unit");
+    let mut photo = BodyPose::rest(&model);
+    photo.rotations[joint("head")] = Vec3::new(0.2, -0.3, 0.05);
+    photo.rotations[joint("spine03")] = Vec3::new(0.0, 0.25, -0.1);
+    photo.coefficients[unit("mouthSmileLeft")] = 0.9;
+    photo.coefficients[unit("jawOpen")] = 1.2;
+    let mut pose = photo.clone();
+    retarget.sample(&demo, 0.0, &mut pose);
+    let moved = |a: &BodyPose, b: &BodyPose| {
+        let turns = a.rotations.iter().zip(&b.rotations);
+        let values = a.coefficients.iter().zip(&b.coefficients);
+        turns
+            .map(|(x, y)| angle(Quat::from_scaled_axis(*x), Quat::from_scaled_axis(*y)))
+            .chain(values.map(|(x, y)| (x - y).abs()))
+            .fold(0.0f32, f32::max)
+    };
+    assert!(
+        moved(&pose, &photo) < 1e-6,
+        "the first frame leaves the photo's pose"
+    );
+    // Mid-smile and mid-turn (3.6 s: the smile at its 0.85, the head tilted 0.12 rad).
+    let index = (3.6 * demo.fps).round() as usize;
+    let frame = &demo.frames[index];
+    let driven = |name: &str| {
+        let k = demo
+            .parameters
+            .iter()
+            .position(|p| p == name)
+            .expect("driven");
+        frame.values[k]
+    };
+    let track = |name: &str| {
+        let k = demo.joints.iter().position(|j| j == name).expect("driven");
+        Quat::from_scaled_axis(Vec3::from(frame.rotations[k]))
+    };
+    let time = index as f64 / demo.fps as f64;
+    retarget.sample(&demo, time, &mut pose);
+    let head = Quat::from_scaled_axis(pose.rotations[joint("head")]);
+    let expected = Quat::from_scaled_axis(photo.rotations[joint("head")]) * track("head");
+    assert!(
+        angle(head, expected) < 1e-5,
+        "{head:?} against {expected:?}"
+    );
+    assert!(angle(track("head"), Quat::IDENTITY) > 0.1, "the head moves");
+    let smile = pose.coefficients[unit("mouthSmileLeft")];
+    assert!(driven("mouthSmileLeft") > 0.5);
+    assert!((smile - 1.0).abs() < 1e-6, "0.9 and more: {smile}");
+    let jaw = pose.coefficients[unit("jawOpen")];
+    assert!((jaw - 1.2).abs() < 1e-6, "past the top already: {jaw}");
+    // Sampled again into the same pose, the base put back first: the same pose, not twice.
+    let once = pose.clone();
+    retarget.restore(&photo, &mut pose);
+    retarget.sample(&demo, time, &mut pose);
+    assert!(moved(&pose, &once) < 1e-6);
 }
 
 /// SMPL-X motion on the default body: names mapped, FLAME/SMPL-X expression reported as lost,
@@ -450,6 +522,15 @@ fn default_motion_onto_an_smplx_rig_reports_what_it_drops() {
             Ok(())
         }
     }
+    // Layered, the demo's turns are turns on either rig: its rest leaves the pose as it is.
+    let layered = Retarget::new(&demo, &Names);
+    assert!(!layered.report.rest_corrected);
+    let mut pose = BodyPose::rest(&Names);
+    layered.sample(&demo, 0.0, &mut pose);
+    assert_eq!(pose, BodyPose::rest(&Names));
+    // A tracked (replacing) motion of the default rig is rest corrected.
+    let mut demo = demo;
+    demo.layered = false;
     let retarget = Retarget::new(&demo, &Names);
     let report = &retarget.report;
     assert!(report.unmapped_joints.is_empty(), "{report:?}");
@@ -458,7 +539,6 @@ fn default_motion_onto_an_smplx_rig_reports_what_it_drops() {
     assert!(report.rest_corrected);
     // At rest the default body's arms hang in its A-pose; on a T-pose rig that is a shoulder
     // rotation taking the T-pose arm onto the default body's rest arm.
-    let mut pose = BodyPose::rest(&Names);
     retarget.sample(&demo, 0.0, &mut pose);
     let model = BodyModel::default_body().expect("default body");
     let rest = |n: &str| model.joints[model.joint_index(n).expect("present")].rest;

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Writes assets/demo_motion.json: 8 s of authored motion for the default body (talking, a smile,
 blinks, looking around, a head turn and a hand wave), in our tracking format, so the viewer moves
-on first launch.
+on first launch. It is layered (the format's `layered`): each rotation turns its joint on from
+the avatar's photo pose and each value adds to the photo's expression.
 
 Keyframes below, eased with a cosine between keys, sampled at 30 fps. The wave's elbow rotation is
 solved from the default body's rest joints (read from assets/anny_body.glb), so the forearm points
@@ -208,6 +209,9 @@ def main():
         "joints": joint_names,
         "parameters": parameters,
         "identity": {"parameters": {}},
+        # Layered on the pose it drives: its rest (the first frame) leaves an avatar as its photo
+        # shows it, and the talking, the looks and the wave move on from there.
+        "layered": True,
     }
     text = json.dumps(header, indent=2)[:-2] + ',\n  "frames": [\n'
     text += ",\n".join("    " + json.dumps(f, separators=(",", ":")) for f in frames)

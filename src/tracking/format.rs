@@ -51,6 +51,12 @@ pub struct Tracking {
     pub parameters: Vec<String>,
     #[serde(default)]
     pub identity: Identity,
+    /// Whether the motion is layered on the pose it drives (an authored motion, such as the
+    /// demo's) instead of replacing it (a tracked one): each rotation turns its joint on from
+    /// where the pose has it, each value adds to the pose's, so its first frame, at rest, leaves
+    /// an avatar as its photo shows it.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub layered: bool,
     pub frames: Vec<Frame>,
 }
 
@@ -178,6 +184,7 @@ impl Tracking {
             joints,
             parameters,
             identity: Identity::default(),
+            layered: false,
             frames: Vec::new(),
         }
     }

@@ -212,8 +212,10 @@ impl Retarget {
         // Rest correction: Q_b takes the model's rest direction of arm bone b onto the tracked
         // rig's. A joint turning bone b under parent bone p gets Q_p⁻¹·R·Q_b, so every posed
         // bone points where the tracked rig's would.
+        // A layered motion's rotations are turns from wherever the joints are, the same turn in
+        // either rig's world-aligned frames: it needs none.
         let corrections: Option<[[Quat; 3]; 2]> = match model_rig {
-            Some(rig) if rig != tracking.body => rest_arm_bones(model, rig)
+            Some(rig) if rig != tracking.body && !tracking.layered => rest_arm_bones(model, rig)
                 .zip(source_arm_bones(tracking.body))
                 .map(|(to, from)| {
                     [0, 1].map(|s| [0, 1, 2].map(|b| Quat::from_rotation_arc(to[s][b], from[s][b])))
@@ -286,12 +288,19 @@ impl Retarget {
 
     /// The pose at `time` (seconds, clamped to the sequence): rotations slerped and coefficients
     /// blended linearly between the two nearest frames. Writes only the channels the tracking
-    /// drives; the rest of `pose` (joints it lacks, hand-set sliders) is left as it is.
-    /// `pose` must belong to the model this was built for. Allocates nothing.
+    /// drives; the rest of `pose` (joints it lacks, hand-set sliders) is left as it is. A
+    /// layered tracking ([`Tracking::layered`]) turns each joint on from `pose`'s rotation and
+    /// adds to its values and translation, so `pose` must then hold the base each time (a fresh
+    /// copy, or [`Self::restore`]). `pose` must belong to the model this was built for.
+    /// Allocates nothing.
     pub fn sample(&self, tracking: &Tracking, time: f64, pose: &mut BodyPose) {
         let (a, b, t) = bracket(tracking, time);
         let (fa, fb) = (&tracking.frames[a], &tracking.frames[b]);
-        pose.translation = Vec3::from(fa.translation).lerp(Vec3::from(fb.translation), t);
+        let translation = Vec3::from(fa.translation).lerp(Vec3::from(fb.translation), t);
+        pose.translation = match tracking.layered {
+            true => pose.translation + translation,
+            false => translation,
+        };
         for link in &self.joints {
             let qa = Quat::from_scaled_axis(Vec3::from(fa.rotations[link.track]));
             let q = if t == 0.0 {
@@ -302,24 +311,51 @@ impl Retarget {
                     t,
                 )
             };
-            pose.rotations[link.model] =
-                if link.pre == Quat::IDENTITY && link.post == Quat::IDENTITY {
-                    if t == 0.0 {
-                        Vec3::from(fa.rotations[link.track])
-                    } else {
-                        q.to_scaled_axis()
-                    }
+            let rotation = &mut pose.rotations[link.model];
+            *rotation = if tracking.layered {
+                (Quat::from_scaled_axis(*rotation) * q)
+                    .normalize()
+                    .to_scaled_axis()
+            } else if link.pre == Quat::IDENTITY && link.post == Quat::IDENTITY {
+                if t == 0.0 {
+                    Vec3::from(fa.rotations[link.track])
                 } else {
-                    (link.pre * q * link.post).normalize().to_scaled_axis()
-                };
+                    q.to_scaled_axis()
+                }
+            } else {
+                (link.pre * q * link.post).normalize().to_scaled_axis()
+            };
         }
         for &(tr, m) in &self.parameters {
-            pose.coefficients[m] = fa.values[tr] + (fb.values[tr] - fa.values[tr]) * t;
+            let value = fa.values[tr] + (fb.values[tr] - fa.values[tr]) * t;
+            let coefficient = &mut pose.coefficients[m];
+            *coefficient = match tracking.layered {
+                true => layer(*coefficient, value),
+                false => value,
+            };
         }
         for &(m, v) in &self.identity {
             pose.coefficients[m] = v;
         }
     }
+
+    /// Puts `base`'s values back on the channels this tracking drives, for a pose kept from one
+    /// sample to the next under a layered tracking (the viewer's).
+    pub fn restore(&self, base: &BodyPose, pose: &mut BodyPose) {
+        pose.translation = base.translation;
+        for link in &self.joints {
+            pose.rotations[link.model] = base.rotations[link.model];
+        }
+        for &(_, m) in &self.parameters {
+            pose.coefficients[m] = base.coefficients[m];
+        }
+    }
+}
+
+/// A layered value added to `base`'s, up to a unit's top (1) or to `base` where the photo is
+/// already past it: a smile layered on a laughing face stays a laugh, not twice one.
+fn layer(base: f32, value: f32) -> f32 {
+    (base + value).min(base.max(1.0))
 }
 
 /// The frames around `time` and the blend weight of the second.

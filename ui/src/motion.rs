@@ -24,6 +24,9 @@ pub struct Motion {
     import_notes: Vec<String>,
     /// The clock time last written into the pose (`None`: write on the next update).
     sampled_at: Option<f64>,
+    /// What a layered motion is layered on: the pose as the next update finds it after a new
+    /// avatar or body (the photo's pose).
+    base: Option<BodyPose>,
 }
 
 impl Motion {
@@ -38,6 +41,7 @@ impl Motion {
             notes: Vec::new(),
             import_notes: imported.notes,
             sampled_at: None,
+            base: None,
         };
         motion.refresh_notes();
         motion
@@ -47,13 +51,14 @@ impl Motion {
     pub fn retarget_to(&mut self, model: &impl Posable) {
         self.retarget = Retarget::new(&self.tracking, model);
         self.refresh_notes();
-        self.sampled_at = None;
+        self.resample();
     }
 
     /// Writes the pose again on the next update (the pose was replaced underneath: a new
-    /// avatar's photo pose).
+    /// avatar's photo pose, which a layered motion is then layered on).
     pub fn resample(&mut self) {
         self.sampled_at = None;
+        self.base = None;
     }
 
     fn refresh_notes(&mut self) {
@@ -92,6 +97,10 @@ impl Motion {
         let time = self.player.time();
         if self.sampled_at == Some(time) {
             return false;
+        }
+        if self.tracking.layered {
+            let base = self.base.get_or_insert_with(|| pose.clone());
+            self.retarget.restore(base, pose);
         }
         self.retarget.sample(&self.tracking, time, pose);
         self.sampled_at = Some(time);
