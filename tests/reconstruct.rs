@@ -725,9 +725,10 @@ fn the_gpu_rig_matches_the_cpu_rig() {
 /// the body at rest (0.5 m of height in view) leaves both hands far out. At the photo's pose no
 /// Gaussian on either hand is drawn (they hang below the bust); in the demo motion's wave the
 /// raised hand's are, as a hand raised to the face is in a close-up video, and the lowered hand's
-/// stay hidden; the GPU rig decides as the CPU rig does; with the body the photo did not show
-/// drawn (the viewer's switch), both hands are. Before, such hands were left out of the avatar
-/// altogether (the shipped clip's hand over her mouth was never drawn).
+/// stay hidden, and so are their forearms'; the GPU rig decides as the CPU rig does; with the
+/// body the photo did not show drawn (the viewer's switch), both hands are. Before, such hands
+/// were left out of the avatar altogether (the shipped clip's hand over her mouth was never
+/// drawn), and later their forearms (a raised hand floated beyond its sleeve).
 #[test]
 fn hands_the_photo_did_not_show_are_drawn_only_in_its_view() {
     use guava::avatar::HandsInView;
@@ -768,6 +769,28 @@ fn hands_the_photo_did_not_show_are_drawn_only_in_its_view() {
         left.len(),
         right.len()
     );
+    // And each forearm's (every corner moved most by a forearm joint of that side), which go
+    // with their hands: left out, the raised hand floated beyond its sleeve.
+    let on_forearm = |side: &str| -> Vec<usize> {
+        (0..avatar.shown_uv(false))
+            .filter(|&i| {
+                body.triangles[avatar.uv.triangles[i] as usize]
+                    .iter()
+                    .all(|&v| {
+                        let joint = &body.joints[body.dominant_joint(v as usize)].name;
+                        joint.starts_with("lowerarm") && joint.ends_with(side)
+                    })
+            })
+            .map(|i| first_uv + i)
+            .collect()
+    };
+    let (left_forearm, right_forearm) = (on_forearm(".L"), on_forearm(".R"));
+    assert!(
+        left_forearm.len() > 500 && right_forearm.len() > 500,
+        "forearms kept: {} {}",
+        left_forearm.len(),
+        right_forearm.len()
+    );
     let nose = body
         .landmarks
         .iter()
@@ -800,15 +823,30 @@ fn hands_the_photo_did_not_show_are_drawn_only_in_its_view() {
             .fold(0.0f32, f32::max);
         let count = |hand: &[usize]| hand.iter().filter(|&&i| cpu.opacities[i] > 0.0).count();
         let (l, r) = (count(&left), count(&right));
+        let (lf, rf) = (count(&left_forearm), count(&right_forearm));
         println!(
-            "{name}: drawn on the left hand {l} of {}, on the right {r} of {}; opacity |GPU − CPU| ≤ {worst}",
+            "{name}: drawn on the left hand {l} of {}, on the right {r} of {}, on the forearms {lf} of {} and {rf} of {}; opacity |GPU − CPU| ≤ {worst}",
             left.len(),
-            right.len()
+            right.len(),
+            left_forearm.len(),
+            right_forearm.len()
         );
         assert!(worst <= 1e-6, "{name}: {worst}");
-        drawn.push((l, r));
+        drawn.push((l, r, lf, rf));
     }
-    assert_eq!(drawn, [(0, 0), (0, right.len())]);
+    // Near the elbow the forearms lie within the photo's margin, kept and drawn as the rest of
+    // the body there (409 of 1568 measured); the rest go with their hands.
+    let [(_, _, elbow_l, elbow_r), _] = drawn[..] else {
+        unreachable!("two poses")
+    };
+    assert!(2 * elbow_l < left_forearm.len() && 2 * elbow_r < right_forearm.len());
+    assert_eq!(
+        drawn,
+        [
+            (0, 0, elbow_l, elbow_r),
+            (0, right.len(), elbow_l, right_forearm.len())
+        ]
+    );
     // With the body the photo did not show drawn (the viewer's switch), so are its hands.
     gpu_avatar.show_outside(&renderer.gpu.queue, true);
     let mut posed = PosedBody::default();

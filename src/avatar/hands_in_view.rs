@@ -7,7 +7,10 @@
 //! pose by the body's root, lies where the photo's camera saw (within [`SEEN_MARGIN`] of the
 //! square, as what is kept of the body); hanging below the bust it is hidden. (The wrist alone
 //! was not enough: the shipped clip's hand over her mouth has its wrist below the frame.) A hand
-//! the photo showed is drawn as the avatar has it.
+//! the photo showed is drawn as the avatar has it. The lower arm (elbow and forearm) of a hand
+//! the photo did not show, where the photo did not show it either, is drawn while that hand
+//! lies inside the photo itself (raised into it, not hanging just below it): left out, a waving
+//! avatar cut at the chest (Grace Hopper) held up a hand floating beyond its sleeve.
 
 use glam::{Affine3A, Vec3};
 
@@ -18,6 +21,10 @@ use crate::camera::Camera;
 /// The body just past the photo's edge is kept (turned views see a little of it, coloured from
 /// what the photo shows next to it): this share of the photo's side beyond each edge.
 pub const SEEN_MARGIN: f32 = 0.25;
+
+/// The arm's joints from the upper arm's middle down to the wrist (their names' beginnings): a
+/// vertex moved most by one is the lower arm's. (The forearm's alone left a gap at the elbow.)
+const LOWER_ARM: [&str; 2] = ["upperarm02", "lowerarm"];
 
 /// Whether `camera` sees `point` within `bounds` (left, top, right, bottom, in its pixels) or
 /// within [`SEEN_MARGIN`] of them.
@@ -37,7 +44,8 @@ pub fn seen_within(camera: &Camera, bounds: [f32; 4], margin: f32, point: Vec3) 
 /// An avatar's hands the photo did not show, with what deciding their visibility needs.
 #[derive(Clone, Debug)]
 pub struct HandsInView {
-    /// Per body vertex: 0 off those hands, 1 the left hand's, 2 the right's.
+    /// Per body vertex: 0 off those hands, 1 the left hand's, 2 the right's, 3 the left lower
+    /// arm's and 4 the right's where the photo did not show them.
     sides: Vec<u8>,
     /// Each hand's wrist, middle knuckle and middle fingertip joints.
     joints: [[usize; 3]; 2],
@@ -68,19 +76,48 @@ impl HandsInView {
             root: *posed.joints.first()?,
             camera: view.camera,
         };
-        let unseen = hands.in_view(&posed).map(|seen| !seen);
+        let unseen = hands.in_view(&posed, SEEN_MARGIN).map(|seen| !seen);
+        let bounds = [
+            0.0,
+            0.0,
+            view.camera.width as f32,
+            view.camera.height as f32,
+        ];
+        let names: Vec<&str> = body.joint_names().collect();
+        let lower_arm_side = |v: usize| -> u8 {
+            let Some(name) = body.dominant_joint(v).and_then(|j| names.get(j)) else {
+                return 0;
+            };
+            let side = match name.rsplit('.').next() {
+                Some("L") => 0,
+                Some("R") => 1,
+                _ => return 0,
+            };
+            let shown = seen_near(&view.camera, bounds, posed.vertices[v]);
+            let lower_arm = LOWER_ARM.iter().any(|j| name.starts_with(j));
+            match lower_arm && unseen[side] && !shown {
+                true => 3 + side as u8,
+                false => 0,
+            }
+        };
         hands.sides = (0..body.vertex_count())
             .map(|v| match body.part_of(v) {
                 Some("hand.L") if unseen[0] => 1,
                 Some("hand.R") if unseen[1] => 2,
-                _ => 0,
+                _ => lower_arm_side(v),
             })
             .collect();
         hands.sides.iter().any(|&s| s != 0).then_some(hands)
     }
 
-    /// Whether each hand (left, right) of the body posed as `posed` is in the photo's view.
-    pub fn in_view(&self, posed: &PosedBody) -> [bool; 2] {
+    /// Whether vertex `v` is drawn only while its hand is in the photo's view.
+    pub fn hides(&self, v: usize) -> bool {
+        self.sides.get(v).is_some_and(|&s| s != 0)
+    }
+
+    /// Whether each hand (left, right) of the body posed as `posed` is in the photo's view,
+    /// or within `margin` (a share of its side) of it.
+    fn in_view(&self, posed: &PosedBody, margin: f32) -> [bool; 2] {
         let Some(root) = posed.joints.first() else {
             return [true; 2];
         };
@@ -95,19 +132,21 @@ impl HandsInView {
             hand.iter().any(|&j| {
                 posed.joints.get(j).is_none_or(|joint| {
                     let at = back.transform_point3a(joint.translation).into();
-                    seen_near(&self.camera, bounds, at)
+                    seen_within(&self.camera, bounds, margin, at)
                 })
             })
         })
     }
 
-    /// Per body vertex, 1 where it is drawn and 0 on a hand out of the photo's view.
+    /// Per body vertex, 1 where it is drawn and 0 on a hand out of the photo's view (or a lower
+    /// arm whose hand is out of the photo itself).
     pub fn visibility(&self, posed: &PosedBody, out: &mut Vec<f32>) {
-        let [left, right] = self.in_view(posed);
+        let near = self.in_view(posed, SEEN_MARGIN);
+        let inside = self.in_view(posed, 0.0);
         out.clear();
         out.extend(self.sides.iter().map(|&s| match s {
-            1 => f32::from(u8::from(left)),
-            2 => f32::from(u8::from(right)),
+            1 | 2 => f32::from(u8::from(near[usize::from(s - 1)])),
+            3 | 4 => f32::from(u8::from(inside[usize::from(s - 3)])),
             _ => 1.0,
         }));
     }

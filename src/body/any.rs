@@ -164,4 +164,11 @@ impl Posable for AnyBody {
             Self::Ehm(m) => Posable::part_of(m.as_ref(), v),
         }
     }
+
+    fn dominant_joint(&self, v: usize) -> Option<usize> {
+        match self {
+            Self::Template(m) => Posable::dominant_joint(m.as_ref(), v),
+            Self::Ehm(m) => Posable::dominant_joint(m.as_ref(), v),
+        }
+    }
 }

@@ -63,6 +63,10 @@ pub trait Posable {
     fn part_of(&self, _v: usize) -> Option<&str> {
         None
     }
+    /// The joint that moves vertex `v` most; `None` on a body that does not say.
+    fn dominant_joint(&self, _v: usize) -> Option<usize> {
+        None
+    }
 }
 
 impl BodyPose {
@@ -248,5 +252,9 @@ impl Posable for BodyModel {
 
     fn part_of(&self, v: usize) -> Option<&str> {
         BodyModel::part_of(self, v)
+    }
+
+    fn dominant_joint(&self, v: usize) -> Option<usize> {
+        Some(BodyModel::dominant_joint(self, v))
     }
 }

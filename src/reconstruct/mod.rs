@@ -244,7 +244,7 @@ pub const NEUTRAL_FILL: f32 = 0.5;
 /// of its edge ([`seen_within`]) move, greyed, to the end of the UV set (the avatar's `outside`
 /// block, drawn only on request), and the template Gaussians on such vertices go transparent. The hands
 /// stay, in the colour their part was given: a hand raised into the photo's view is drawn
-/// there ([`crate::avatar::HandsInView`]). The legs are kept only inside the photo, not near
+/// there, with its lower arm where the photo did not show that ([`crate::avatar::HandsInView`]). The legs are kept only inside the photo, not near
 /// its edge: below an upper-body photo they hung as sticks in the colours at its bottom edge
 /// (the torso's margin is for turned views, which see the body go on past the edge). Returns
 /// how many UV Gaussians were left out.
@@ -256,6 +256,7 @@ fn leave_out(
     shown: Shown,
 ) -> usize {
     let bounds = [shown.left, shown.top, shown.right, shown.bottom].map(|v| v as f32);
+    let hands = crate::avatar::HandsInView::new(avatar, body);
     let seen: Vec<bool> = vertices
         .iter()
         .enumerate()
@@ -264,6 +265,7 @@ fn leave_out(
             let leg = LEG_JOINTS.iter().any(|j| joint.starts_with(j));
             let margin = if leg { 0.0 } else { SEEN_MARGIN };
             body.part_of(i).is_some_and(|p| p.starts_with("hand."))
+                || hands.as_ref().is_some_and(|h| h.hides(i))
                 || seen_within(camera, bounds, margin, v)
         })
         .collect();
