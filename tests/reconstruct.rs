@@ -750,41 +750,35 @@ fn hands_the_photo_did_not_show_are_drawn_only_in_its_view() {
     let (avatar, _) = reconstruct(&view, &image).expect("reconstruct");
     let hands = HandsInView::new(&avatar, body).map(std::sync::Arc::new);
     assert!(hands.is_some(), "the rest photo shows neither hand");
-    // Each UV Gaussian on a hand, by side, with its index in the posed cloud.
+    // Each UV Gaussian all of whose corners `of` takes, with its index in the posed cloud: on a
+    // hand, by side, and on each forearm (every corner moved most by a forearm joint of that
+    // side), which go with their hands: left out, the raised hand floated beyond its sleeve.
     let first_uv = avatar.template.len() + avatar.skinned.len();
-    let on_hand = |side: &str| -> Vec<usize> {
+    let on = |of: &dyn Fn(usize) -> bool| -> Vec<usize> {
         (0..avatar.shown_uv(false))
             .filter(|&i| {
                 body.triangles[avatar.uv.triangles[i] as usize]
                     .iter()
-                    .all(|&v| body.part_of(v as usize) == Some(side))
+                    .all(|&v| of(v as usize))
             })
             .map(|i| first_uv + i)
             .collect()
     };
-    let (left, right) = (on_hand("hand.L"), on_hand("hand.R"));
+    let hand = |side: &'static str| move |v: usize| body.part_of(v) == Some(side);
+    let forearm = |side: &'static str| {
+        move |v: usize| {
+            let joint = &body.joints[body.dominant_joint(v)].name;
+            joint.starts_with("lowerarm") && joint.ends_with(side)
+        }
+    };
+    let (left, right) = (on(&hand("hand.L")), on(&hand("hand.R")));
     assert!(
         left.len() > 500 && right.len() > 500,
         "{} {}",
         left.len(),
         right.len()
     );
-    // And each forearm's (every corner moved most by a forearm joint of that side), which go
-    // with their hands: left out, the raised hand floated beyond its sleeve.
-    let on_forearm = |side: &str| -> Vec<usize> {
-        (0..avatar.shown_uv(false))
-            .filter(|&i| {
-                body.triangles[avatar.uv.triangles[i] as usize]
-                    .iter()
-                    .all(|&v| {
-                        let joint = &body.joints[body.dominant_joint(v as usize)].name;
-                        joint.starts_with("lowerarm") && joint.ends_with(side)
-                    })
-            })
-            .map(|i| first_uv + i)
-            .collect()
-    };
-    let (left_forearm, right_forearm) = (on_forearm(".L"), on_forearm(".R"));
+    let (left_forearm, right_forearm) = (on(&forearm(".L")), on(&forearm(".R")));
     assert!(
         left_forearm.len() > 500 && right_forearm.len() > 500,
         "forearms kept: {} {}",
