@@ -178,24 +178,28 @@ impl BodyState {
         self.weld.clone()
     }
 
-    pub fn ui(&mut self, ui: &mut egui::Ui) {
+    /// The panel; returns whether the pose was put to rest (a layered motion then layers on
+    /// the rest pose instead of the photo's).
+    pub fn ui(&mut self, ui: &mut egui::Ui) -> bool {
         ui.label(&self.label);
-        ui.horizontal(|ui| {
-            ui.checkbox(&mut self.shaded, "shaded");
-            ui.checkbox(&mut self.wireframe, "wireframe");
-            if ui
-                .button("Rest pose")
-                .on_hover_text("every joint and parameter at rest, every group reset")
-                .clicked()
-            {
-                self.pose = BodyPose::rest(self.model.as_ref());
-                self.controls.groups.iter_mut().for_each(|g| g.reset());
-            }
-        });
+        let rest = ui
+            .horizontal(|ui| {
+                ui.checkbox(&mut self.shaded, "shaded");
+                ui.checkbox(&mut self.wireframe, "wireframe");
+                ui.button("Rest pose")
+                    .on_hover_text("every joint and parameter at rest, every group reset")
+                    .clicked()
+            })
+            .inner;
+        if rest {
+            self.pose = BodyPose::rest(self.model.as_ref());
+            self.controls.groups.iter_mut().for_each(|g| g.reset());
+        }
         self.controls.ui(ui);
         egui::CollapsingHeader::new("Any joint or parameter (advanced)")
             .default_open(false)
             .show(ui, |ui| self.rig_ui(ui));
+        rest
     }
 
     /// The rig's own joints and parameters, one slider each.

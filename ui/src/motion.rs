@@ -175,3 +175,51 @@ fn toggle(p: &mut Player) {
     }
     p.playing = !p.playing;
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{Quat, Vec3};
+    use guava::body::BodyModel;
+
+    /// The viewer's pose persists from frame to frame, and the demo motion is layered on the
+    /// photo's pose: each update layers it on the base once (not on the last frame's pose), and
+    /// after the pose is replaced underneath (a new avatar, the *Rest pose* button) it layers on
+    /// the new one.
+    #[test]
+    fn a_layered_motion_layers_on_the_pose_it_found_once() {
+        let body = BodyModel::default_body().expect("default body");
+        let tracking = guava::tracking::demo_motion().expect("demo motion");
+        assert!(tracking.layered);
+        let imported = Imported {
+            tracking,
+            notes: Vec::new(),
+        };
+        let mut motion = Motion::new("demo".into(), imported, &body);
+        motion.player.playing = false;
+        let head = body.joint_index("head").expect("head");
+        let turn = |pose: &BodyPose| Quat::from_scaled_axis(pose.rotations[head]);
+        // The angle between two rotations, accurate near zero (unlike an acos of their dot).
+        let apart = |a: Quat, b: Quat| 2.0 * (a.inverse() * b).xyz().length();
+        let mut photo = BodyPose::rest(&body);
+        photo.rotations[head] = Vec3::new(0.1, 0.4, 0.0);
+        let mut pose = photo.clone();
+        motion.player.seek(3.6);
+        assert!(motion.update(0.0, &mut pose));
+        let on_photo = turn(&pose);
+        assert!(apart(on_photo, turn(&photo)) > 0.05, "the head moves");
+        // Back and forth in time: the same pose at the same time, nothing piled up.
+        motion.player.seek(5.5);
+        motion.update(0.0, &mut pose);
+        motion.player.seek(3.6);
+        motion.update(0.0, &mut pose);
+        assert!(apart(turn(&pose), on_photo) < 1e-5);
+        // The pose put to rest underneath: the motion layers on rest from then on.
+        pose = BodyPose::rest(&body);
+        motion.resample();
+        motion.update(0.0, &mut pose);
+        let on_rest = turn(&pose);
+        let expected = turn(&photo).inverse() * on_photo;
+        assert!(apart(on_rest, expected) < 1e-5, "{on_rest:?} {expected:?}");
+    }
+}

@@ -191,7 +191,13 @@ impl GuavaApp {
             ui.separator();
             ui.heading("Body");
             match &mut self.doc.body {
-                Some(body) => body.ui(ui),
+                Some(body) => {
+                    if body.ui(ui)
+                        && let Some(motion) = &mut self.doc.motion
+                    {
+                        motion.resample();
+                    }
+                }
                 None => {
                     ui.label("no body model loaded");
                 }
