@@ -143,12 +143,12 @@ const GAZE_PRIOR_PER_EYE_SPAN: f64 = 0.02;
 const HIP_WEIGHT: f64 = 0.25;
 /// A photo's legs are posed only when a knee is seen at this confidence (a full-body photo).
 const LEGS_SEEN: f32 = 0.8;
-/// The legs' joints the body stage turns.
-const LEG_JOINTS: [&str; 4] = [
-    "upperleg01.L",
-    "upperleg01.R",
-    "lowerleg01.L",
-    "lowerleg01.R",
+/// The legs' joints the body stage turns, each with the keypoint at its far end.
+const LEGS: [(&str, &str); 4] = [
+    ("upperleg01.L", "left_knee"),
+    ("upperleg01.R", "right_knee"),
+    ("lowerleg01.L", "left_ankle"),
+    ("lowerleg01.R", "right_ankle"),
 ];
 const ITERATIONS: usize = 30;
 /// A video frame's fit starts where the last one ended: a few iterations a stage suffice.
@@ -556,13 +556,10 @@ fn fit_from(
     for name in FITTED_JOINTS {
         // A leg turns only where the keypoint at its far end was seen: otherwise the hip points
         // alone (skinned to the thighs) lifted the demo portrait's thigh 57° toward the camera.
-        let far_end = match name {
-            "upperleg01.L" => Some("left_knee"),
-            "upperleg01.R" => Some("right_knee"),
-            "lowerleg01.L" => Some("left_ankle"),
-            "lowerleg01.R" => Some("right_ankle"),
-            _ => None,
-        };
+        let far_end = LEGS
+            .iter()
+            .find(|(leg, _)| *leg == name)
+            .map(|(_, end)| *end);
         // In a video's later frames the legs stay as its first frame fitted them.
         if far_end.is_some_and(|k| !has(k)) {
             continue;
@@ -631,7 +628,7 @@ fn fit_from(
             .iter()
             .any(|k| k.name.ends_with("_knee") && k.confidence >= LEGS_SEEN);
     if legs_rest {
-        for name in LEG_JOINTS {
+        for (name, _) in LEGS {
             let j = joint(name)?;
             result.pose.rotations[j] = relaxed.rotations[j];
         }
