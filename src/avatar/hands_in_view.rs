@@ -27,13 +27,8 @@ pub const SEEN_MARGIN: f32 = 0.25;
 const LOWER_ARM: [&str; 2] = ["upperarm02", "lowerarm"];
 
 /// Whether `camera` sees `point` within `bounds` (left, top, right, bottom, in its pixels) or
-/// within [`SEEN_MARGIN`] of them.
-pub fn seen_near(camera: &Camera, bounds: [f32; 4], point: Vec3) -> bool {
-    seen_within(camera, bounds, SEEN_MARGIN, point)
-}
-
-/// Whether `camera` sees `point` within `bounds` or within `margin` (a share of the camera's
-/// side) of them.
+/// within `margin` (a share of the camera's side, [`SEEN_MARGIN`] for what is kept of the body)
+/// of them.
 pub fn seen_within(camera: &Camera, bounds: [f32; 4], margin: f32, point: Vec3) -> bool {
     let [left, top, right, bottom] = bounds;
     let (mx, my) = (margin * camera.width as f32, margin * camera.height as f32);
@@ -77,12 +72,6 @@ impl HandsInView {
             camera: view.camera,
         };
         let unseen = hands.in_view(&posed, SEEN_MARGIN).map(|seen| !seen);
-        let bounds = [
-            0.0,
-            0.0,
-            view.camera.width as f32,
-            view.camera.height as f32,
-        ];
         let names: Vec<&str> = body.joint_names().collect();
         let lower_arm_side = |v: usize| -> u8 {
             let Some(name) = body.dominant_joint(v).and_then(|j| names.get(j)) else {
@@ -93,20 +82,21 @@ impl HandsInView {
                 Some("R") => 1,
                 _ => return 0,
             };
-            let shown = seen_near(&view.camera, bounds, posed.vertices[v]);
+            let shown = hands.sees(SEEN_MARGIN, posed.vertices[v]);
             let lower_arm = LOWER_ARM.iter().any(|j| name.starts_with(j));
             match lower_arm && unseen[side] && !shown {
                 true => 3 + side as u8,
                 false => 0,
             }
         };
-        hands.sides = (0..body.vertex_count())
+        let sides: Vec<u8> = (0..body.vertex_count())
             .map(|v| match body.part_of(v) {
                 Some("hand.L") if unseen[0] => 1,
                 Some("hand.R") if unseen[1] => 2,
                 _ => lower_arm_side(v),
             })
             .collect();
+        hands.sides = sides;
         hands.sides.iter().any(|&s| s != 0).then_some(hands)
     }
 
@@ -122,20 +112,25 @@ impl HandsInView {
             return [true; 2];
         };
         let back = self.root * root.inverse();
-        let bounds = [
+        self.joints.map(|hand| {
+            hand.iter().any(|&j| {
+                posed.joints.get(j).is_none_or(|joint| {
+                    self.sees(margin, back.transform_point3a(joint.translation).into())
+                })
+            })
+        })
+    }
+
+    /// Whether the photo's camera sees `point` (at the photo's pose) within its square or within
+    /// `margin` of it.
+    fn sees(&self, margin: f32, point: Vec3) -> bool {
+        let square = [
             0.0,
             0.0,
             self.camera.width as f32,
             self.camera.height as f32,
         ];
-        self.joints.map(|hand| {
-            hand.iter().any(|&j| {
-                posed.joints.get(j).is_none_or(|joint| {
-                    let at = back.transform_point3a(joint.translation).into();
-                    seen_within(&self.camera, bounds, margin, at)
-                })
-            })
-        })
+        seen_within(&self.camera, square, margin, point)
     }
 
     /// Per body vertex, 1 where it is drawn and 0 on a hand out of the photo's view (or a lower

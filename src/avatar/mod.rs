@@ -19,7 +19,7 @@ mod preview;
 pub use animate::{BodyMismatch, Rig, blend, quat_from_matrix, quat_mul};
 pub use dress::Dressing;
 pub use file::{AVATAR_FORMAT, AvatarFileError};
-pub use hands_in_view::{HandsInView, SEEN_MARGIN, seen_near, seen_within};
+pub use hands_in_view::{HandsInView, SEEN_MARGIN, seen_within};
 
 use std::collections::BTreeMap;
 
