@@ -21,6 +21,14 @@ const SEARCH_EVERY: usize = 10;
 /// A hand looked for where the pose model puts its wrist and not found there is looked for
 /// again after this many frames (hands below the frame were searched on every frame).
 const HAND_SEARCH_EVERY: usize = 6;
+/// A tracked hand the hand model loses (its presence under ½: a hand over the face, whose
+/// fingers move across it) is looked for again where it was, for this many frames (a quarter
+/// of a second): in its last crop grown [`LOST_HAND_GROWTH`] times, two passes, as a photo's.
+/// The palm detector, which would find it afresh, scores a hand over a face under its
+/// threshold: on the shipped clip her hand was gone for 30 frames (88–118), and is now found
+/// again in the next frame (1.3 times the crop: within 8 frames, or 3 in the clip's own run).
+const LOST_HAND_FRAMES: usize = 6;
+const LOST_HAND_GROWTH: f32 = 2.0;
 
 /// What ran on a frame and how long each part took, for `guava track` and its benchmark.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -29,7 +37,8 @@ pub struct ModelRuns {
     pub person_search: bool,
     /// The face was looked for afresh (from the pose's face points, then the face detector).
     pub face_search: bool,
-    /// Hands looked for afresh from the pose's wrists, and searches by the palm detector.
+    /// Hands looked for afresh: again where they were lost, from the pose's wrists, and by the
+    /// palm detector.
     pub hand_searches: usize,
     /// Time in the pose, face, hand and iris models (each with its crops' sampling and any
     /// search), in [`MODEL_PARTS`] order.
@@ -47,6 +56,8 @@ pub struct LandmarkTracker {
     pose_roi: Option<Roi>,
     face_roi: Option<Roi>,
     hand_rois: [Option<Roi>; 2],
+    /// Frames since each hand was last found (its crop is kept for [`LOST_HAND_FRAMES`]).
+    hand_lost_for: [usize; 2],
     /// Frames since the person, and each hand, were last searched for.
     since_search: usize,
     since_hand_search: [usize; 2],
@@ -115,6 +126,14 @@ impl LandmarkTracker {
         let mut unplaced = false;
         for (k, side) in [Side::Left, Side::Right].into_iter().enumerate() {
             let tracked = match self.hand_rois[k] {
+                Some(roi) if self.hand_lost_for[k] > 0 => {
+                    runs.hand_searches += 1;
+                    let grown = Roi {
+                        side: LOST_HAND_GROWTH * roi.side,
+                        ..roi
+                    };
+                    models.hand.detect_in(source, grown, side)?
+                }
                 Some(roi) => models.hand.detect_passes(source, roi, side, 1)?,
                 None => None,
             };
@@ -142,10 +161,18 @@ impl LandmarkTracker {
             models.hands_from_palms(source, &pose, face.as_ref(), &mut hands)?;
         }
         for (k, side) in [Side::Left, Side::Right].into_iter().enumerate() {
-            self.hand_rois[k] = hands
-                .iter()
-                .find(|h| h.side == side)
-                .map(|h| Roi::hand_from_landmarks(&h.points));
+            match hands.iter().find(|h| h.side == side) {
+                Some(hand) => {
+                    self.hand_rois[k] = Some(Roi::hand_from_landmarks(&hand.points));
+                    self.hand_lost_for[k] = 0;
+                }
+                None => {
+                    self.hand_lost_for[k] += 1;
+                    if self.hand_lost_for[k] > LOST_HAND_FRAMES {
+                        self.hand_rois[k] = None;
+                    }
+                }
+            }
         }
         lap(&mut runs, 2);
         let irises = match &mut face {
