@@ -1153,3 +1153,80 @@ fn a_held_object_moves_as_one_piece() {
     // rotation: 2.4 mm measured across a disc 8 cm wide (22 cm pixel by pixel).
     assert!(worst < 0.005, "the held disc deformed by {worst} m");
 }
+
+/// Cloth beyond the body has a back: the body at rest in a wide blue coat (the photo's person
+/// reaching 20 px past the body's outline, both sides, from the chest down while that stays in
+/// the picture) with a red badge on the coat beyond the body. Seen from behind, a flat disc of
+/// the photo's colour looked the same as from the front, so the badge showed through as a
+/// cut-out: BEFORE of the badge's 144 pixels' places from behind drawn red before
+/// `extras::cloth_back`, AFTER after (bound 5). The source view keeps the badge.
+#[test]
+fn cloth_beyond_the_body_shows_its_back_from_behind() {
+    let body = body();
+    let (view, mut image) = rest_photo();
+    let (width, height) = (image.width() as i32, image.height() as i32);
+    let person: Vec<bool> = image.pixels().map(|p| p[3] > 0).collect();
+    let outline = |y: i32| {
+        let mut row = (0..width).filter(|&x| person[(y * width + x) as usize]);
+        let left = row.next()?;
+        let right = row.next_back().unwrap_or(left);
+        (left >= 20 && right + 20 < width).then_some((left, right))
+    };
+    let neck = body.joints[body.joint_index("neck01").expect("neck")].rest;
+    let top = view.camera.project(neck - Vec3::Y * 0.12).y as i32;
+    let rows: Vec<(i32, i32, i32)> = (top..height)
+        .map_while(|y| outline(y).map(|(l, r)| (y, l, r)))
+        .collect();
+    assert!(rows.len() > 60, "{} rows of coat", rows.len());
+    for &(y, left, right) in &rows {
+        for x in (left - 20..left).chain(right + 1..=right + 20) {
+            image.put_pixel(x as u32, y as u32, image::Rgba([40, 60, 200, 255]));
+        }
+    }
+    // The badge: a 12 px square in the middle of the coat's left band, halfway down.
+    let (middle, left, _) = rows[rows.len() / 2];
+    let badge: Vec<(i32, i32)> = (middle - 6..middle + 6)
+        .flat_map(|y| (left - 16..left - 4).map(move |x| (x, y)))
+        .collect();
+    for &(x, y) in &badge {
+        image.put_pixel(x as u32, y as u32, image::Rgba([210, 30, 30, 255]));
+    }
+    let (avatar, _) = reconstruct(&view, &image).expect("reconstruct");
+    let cloud = cloud_for(&avatar, &view.pose);
+    let mut renderer = crate::common::renderer();
+    let mut draw = |camera: &Camera| {
+        let image = renderer.render(&cloud, camera, &[0.0; 4]).expect("fits").0;
+        guava::eval::interleaved_rgb(&image)
+    };
+    let pixel = |image: &[f32], x: i32, y: i32| {
+        let i = 3 * (y * width + x) as usize;
+        [image[i], image[i + 1], image[i + 2]]
+    };
+    let red = |c: [f32; 3]| c[0] > 0.5 && c[1] < 0.3 && c[2] < 0.3;
+    let front = draw(&view.camera);
+    let kept = badge
+        .iter()
+        .filter(|&&(x, y)| red(pixel(&front, x, y)))
+        .count();
+    // From behind, each badge pixel's place at the body's middle depth.
+    let back_camera = upper_body_camera(body, std::f32::consts::PI);
+    let back = draw(&back_camera);
+    let depth = view.camera.view_from_world.transform_point3(neck).z;
+    let (mut red_behind, mut blue_behind) = (0, 0);
+    for &(x, y) in &badge {
+        let b = back_camera.project(view.camera.unproject(x as f32 + 0.5, y as f32 + 0.5, depth));
+        let c = pixel(&back, b.x as i32, b.y as i32);
+        red_behind += usize::from(red(c));
+        blue_behind += usize::from(c[2] > 0.5 && c[0] < 0.3);
+    }
+    println!(
+        "the badge's {} pixels: {kept} red from the front; from behind {red_behind} red, \
+         {blue_behind} the coat's blue",
+        badge.len()
+    );
+    assert!(kept > 100, "the source view lost the badge: {kept} red");
+    assert!(
+        red_behind <= 10,
+        "{red_behind} of the badge's pixels red from behind"
+    );
+}

@@ -122,12 +122,7 @@ pub fn extras(
     let size = photo.size as usize;
     let covered: Vec<bool> = fragments.triangle.iter().map(|&t| t >= 0).collect();
     let nearest = nearest_seeds(&covered, size);
-    let world_from_view = Mat3A::from_mat4(camera.view_from_world.inverse());
-    // The disc's axes: across the view (camera x and y), thin along it (axis 1 is the thin one,
-    // as for the surface discs); columns (x, z, −y) keep it right-handed.
-    let disc = quat_from_matrix(
-        world_from_view * Mat3A::from_cols(Vec3::X.into(), Vec3::Z.into(), (-Vec3::Y).into()),
-    );
+    let disc = facing_camera(camera);
     let anchors = Anchors::new(body, vertices, posed);
     // The head's middle depth from the camera, where hair is placed.
     let middle = camera
@@ -248,6 +243,11 @@ pub fn extras(
             *slot = Some((distance, skinning));
         }
     }
+    let cloth: Vec<(usize, [f32; 3])> = placed
+        .iter()
+        .filter(|&&(i, _, _, is_held, _)| !is_held && !inside[i])
+        .map(|(i, _, _, _, g)| (*i, [g.features[0], g.features[1], g.features[2]]))
+        .collect();
     for (i, point, skinning, is_held, gaussian) in placed {
         let skinning = match (is_held, attached.get(part[i] as usize)) {
             (true, Some(Some((_, one)))) => *one,
@@ -255,10 +255,117 @@ pub fn extras(
         };
         push(&mut out, point, skinning, disc, &gaussian, vertices, posed);
     }
+    cloth_back(
+        &mut out, &cloth, &covered, &nearest, &anchors, camera, posed,
+    );
     if hair > 0.0 {
         hang_behind(&mut out, &strands, &anchors, camera, fragments, hair, posed);
     }
     out
+}
+
+/// The cloth's back: one disc for each [`BACK_STRIDE`]² pixels of cloth beyond the body, at the
+/// depth of the body's far side at the body pixel nearest it, in the median colour of the cloth
+/// within [`BACK_WINDOW`] of it.
+const BACK_STRIDE: usize = 2;
+const BACK_WINDOW: f32 = 0.09;
+/// At most this many pixels a side of the window go into its median (the rest skipped evenly).
+const BACK_SAMPLES: usize = 24;
+/// The discs in one cell of this many pixels a side share their window's median.
+const BACK_CELL: usize = 8;
+
+/// Appends the back of the cloth beyond the body: a flat disc of the photo's colour looks the
+/// same from behind, so seen from the back the cloth beside the body showed the front's print (a
+/// badge, a name tag) as a cut-out. Behind each [`BACK_STRIDE`]² block of the `cloth` pixels (with
+/// their colours; `nearest` gives each pixel's nearest body pixel) a disc stands at the body's far
+/// side there, in the median colour of the cloth around it (the cloth's colour comes through, a
+/// badge does not, as the body's back takes it: [`super::behind`]), skinned by the body near it.
+fn cloth_back(
+    out: &mut SkinnedGaussians,
+    cloth: &[(usize, [f32; 3])],
+    covered: &[bool],
+    nearest: &[Option<(f32, u32)>],
+    anchors: &Anchors,
+    camera: &Camera,
+    posed: &PosedBody,
+) {
+    if cloth.is_empty() {
+        return;
+    }
+    let size = camera.width as usize;
+    let disc = facing_camera(camera);
+    let far = crate::raster::farthest(anchors.vertices, &anchors.body.triangles, camera);
+    let cells = size.div_ceil(BACK_CELL);
+    let mut medians: Vec<Option<Option<[f32; 3]>>> = vec![None; cells * cells];
+    let mut colour: Vec<Option<[f32; 3]>> = vec![None; size * size];
+    for &(i, c) in cloth {
+        colour[i] = Some(c);
+    }
+    for &(i, _) in cloth {
+        let (x, y) = (i % size, i / size);
+        if x % BACK_STRIDE != 0 || y % BACK_STRIDE != 0 {
+            continue;
+        }
+        // Only where the person covers the disc's footprint in the photo: at the outline it
+        // would widen the source view's silhouette.
+        let r = BACK_STRIDE;
+        let inside = x >= r && y >= r && x + r < size && y + r < size;
+        let hidden = inside
+            && (y - r..=y + r).all(|wy| {
+                (x - r..=x + r)
+                    .all(|wx| covered[wy * size + wx] || colour[wy * size + wx].is_some())
+            });
+        if !hidden {
+            continue;
+        }
+        let Some((_, q)) = nearest[i] else { continue };
+        let z = far[q as usize];
+        if !z.is_finite() {
+            continue;
+        }
+        let point = camera.unproject(x as f32 + 0.5, y as f32 + 0.5, z);
+        let Some(skinning) = anchors.near(point) else {
+            continue;
+        };
+        // The window's median, shared by the discs of one cell (their windows differ by a
+        // cell in ~[`BACK_WINDOW`]).
+        let cell = (y / BACK_CELL) * cells + x / BACK_CELL;
+        let rgb = *medians[cell].get_or_insert_with(|| {
+            let (cx, cy) = (
+                (x / BACK_CELL) * BACK_CELL + BACK_CELL / 2,
+                (y / BACK_CELL) * BACK_CELL + BACK_CELL / 2,
+            );
+            let radius = (BACK_WINDOW / camera.pixel_footprint(z)) as usize;
+            let step = (2 * radius / BACK_SAMPLES).max(1);
+            let mut around = Vec::new();
+            for wy in (cy.saturating_sub(radius)..(cy + radius + 1).min(size)).step_by(step) {
+                for wx in (cx.saturating_sub(radius)..(cx + radius + 1).min(size)).step_by(step) {
+                    around.extend(colour[wy * size + wx]);
+                }
+            }
+            super::behind::median(around)
+        });
+        let Some(rgb) = rgb.or(colour[i]) else {
+            continue;
+        };
+        // As wide as the block of pixels it stands for, and as thick.
+        let across = BACK_STRIDE as f32 * RADIUS_PX * camera.pixel_footprint(z);
+        let extra = Extra {
+            scale: [across, across.min(MAX_DEPTH), across],
+            opacity: OPACITY,
+            features: [rgb[0], rgb[1], rgb[2], 0.0],
+        };
+        push(out, point, skinning, disc, &extra, anchors.vertices, posed);
+    }
+}
+
+/// A disc facing `camera`: across the view (camera x and y), thin along it (axis 1 is the thin
+/// one, as for the surface discs); columns (x, z, −y) keep it right-handed.
+fn facing_camera(camera: &Camera) -> [f32; 4] {
+    let world_from_view = Mat3A::from_mat4(camera.view_from_world.inverse());
+    quat_from_matrix(
+        world_from_view * Mat3A::from_cols(Vec3::X.into(), Vec3::Z.into(), (-Vec3::Y).into()),
+    )
 }
 
 /// How far apart the discs of the hair behind the neck are (metres): it shows no detail of its
