@@ -52,8 +52,8 @@ pub struct Report {
     /// Default mode: texels filled from their mirror image.
     pub mirrored: usize,
     pub behind: usize,
-    /// Default mode: texels of hands and teeth the photo does not show, coloured as what it shows
-    /// of them or from the face's skin.
+    /// Default mode: texels of hands, teeth and eyes the photo does not show, coloured as what it
+    /// shows of them or from the face's skin.
     pub unseen_parts: usize,
     /// Default mode: texels of the body below the photo's bottom edge, coloured as the edge shows it.
     pub past_edge: usize,
@@ -123,7 +123,7 @@ impl Report {
             ),
             None => format!(
                 "{} of {} texels seen, {} mirrored, {} on the back from the front, {} on unseen \
-                 parts of the hands and teeth, {} below the photo's edge, rest inpainted; {} \
+                 parts of the hands, teeth and eyes, {} below the photo's edge, rest inpainted; {} \
                  Gaussians beyond the body; {} on parts the photo did not show left out",
                 self.observed,
                 self.texels,
@@ -188,9 +188,9 @@ impl Report {
             ),
             None => format!(
                 "texels: {} valid, {} seen by the camera, {} filled by symmetry, {} on the back from \
-                 the front, {} on unseen parts of the hands and teeth, {} below the photo's edge \
-                 from the edge, the rest inpainted; {} Gaussians for the person's pixels beyond the \
-                 body; {} on parts the photo did not show left out",
+                 the front, {} on unseen parts of the hands, teeth and eyes, {} below the photo's \
+                 edge from the edge, the rest inpainted; {} Gaussians for the person's pixels \
+                 beyond the body; {} on parts the photo did not show left out",
                 self.texels,
                 self.observed,
                 self.mirrored,

@@ -3,14 +3,16 @@
 //! smear with no iris or pupil. Each triangle of an eyeball's front is also sampled on a finer
 //! lattice, about a photo pixel apart, and every lattice point the photo shows becomes a small
 //! disc of its colour just in front of the coarse discs, riding its triangle as they do; where
-//! the photo does not show the eyeball (under the lids) the coarse discs stay alone. A photo
-//! that shows the eyes a few pixels wide (a whole body) gets none: the map already holds what
-//! it shows.
+//! the photo does not show the eyeball (under the lids) the disc takes the eye's guess
+//! ([`super::unseen_parts::EyeGuess`]: an eye looking straight ahead), so an avatar opening its
+//! eyes wider than the photo did shows an eye there. A photo that shows the eyes a few pixels
+//! wide (a whole body) gets none: the map already holds what it shows.
 
 use glam::Vec3;
 
 use super::default_mode::DiscStyle;
 use super::texture::Sampler;
+use super::unseen_parts::EyeGuess;
 use crate::avatar::UvGaussians;
 use crate::body::{BodyModel, triangle_frames};
 
@@ -38,15 +40,36 @@ fn lattice(n: usize) -> Vec<[f32; 3]> {
     out
 }
 
-/// The fine discs of the eyeballs' fronts on `body` posed at `vertices`, where `sampler` (the
-/// photo seen from its camera) shows them, with the default reconstruction's features (RGB, then
-/// the source confidence).
-pub(super) fn fine_eyes(
+/// One point of an eyeball's fine lattice: where it lies, the disc it would be, and what the
+/// photo shows there.
+struct FinePoint {
+    triangle: u32,
+    barycentric: [f32; 3],
+    /// The point on the body at rest (where a guessed eye is coloured).
+    rest: Vec3,
+    /// The eyeball's front part.
+    part: &'static str,
+    radius: f32,
+    /// The lift along the triangle's normal, towards the camera, in the triangle's frame.
+    lift: f32,
+    /// The photo's colour and confidence, `None` where it does not show the point.
+    seen: Option<([f32; 3], f32)>,
+}
+
+/// The eyeballs' fronts on a lattice about a photo pixel apart, each point sampled from the
+/// photo ([`sample_eyes`]).
+pub(super) struct FineEyes {
+    points: Vec<FinePoint>,
+}
+
+/// Samples the eyeballs' fronts of `body` posed at `vertices` on their fine lattice where
+/// `sampler` (the photo seen from its camera) shows them; the discs' radius from `style`.
+pub(super) fn sample_eyes(
     body: &BodyModel,
     vertices: &[Vec3],
     sampler: &Sampler,
     style: &DiscStyle,
-) -> UvGaussians {
+) -> FineEyes {
     let (ids, tris): (Vec<usize>, Vec<[u32; 3]>) = body
         .triangles
         .iter()
@@ -61,8 +84,12 @@ pub(super) fn fine_eyes(
     let mut frames = Vec::new();
     triangle_frames(vertices, &tris, &mut frames);
     let lattices: Vec<Vec<[f32; 3]>> = (0..=MAX_SUBDIVISIONS).map(lattice).collect();
-    let mut out = UvGaussians::default();
+    let mut points = Vec::new();
     for ((&t, tri), frame) in ids.iter().zip(&tris).zip(&frames) {
+        let part = body
+            .part_of(tri[0] as usize)
+            .and_then(|p| FINE_PARTS.iter().find(|&&f| f == p));
+        let Some(&part) = part else { continue };
         if frame.scale <= 0.0 {
             continue;
         }
@@ -79,23 +106,48 @@ pub(super) fn fine_eyes(
         let normal = frame.rotation.y_axis;
         for &b in &lattices[n] {
             let p: Vec3 = (0..3).map(|k| b[k] * corners[k]).sum();
-            let Some((rgb, confidence)) = sampler.sample(t as u32, p) else {
+            let towards = normal.dot(sampler.eye() - p).signum();
+            points.push(FinePoint {
+                triangle: t as u32,
+                barycentric: b,
+                rest: (0..3).map(|k| b[k] * body.vertices[tri[k] as usize]).sum(),
+                part,
+                radius,
+                lift: towards * LIFT / frame.scale,
+                seen: sampler.sample(t as u32, p),
+            });
+        }
+    }
+    FineEyes { points }
+}
+
+impl FineEyes {
+    /// The fine discs: where the photo shows the point, of its colour; where it does not, of its
+    /// eye's guess among `guessed` (source confidence 0); with the default reconstruction's
+    /// features (RGB, then the source confidence).
+    pub(super) fn discs(&self, guessed: &[EyeGuess], style: &DiscStyle) -> UvGaussians {
+        let mut out = UvGaussians::default();
+        for point in &self.points {
+            let guess = || {
+                let eye = guessed.iter().find(|g| g.part == point.part)?;
+                Some((eye.at(point.rest), 0.0))
+            };
+            let Some((rgb, confidence)) = point.seen.or_else(guess) else {
                 continue;
             };
-            let towards = normal.dot(sampler.eye() - p).signum();
-            out.triangles.push(t as u32);
-            out.barycentrics.push(b);
-            out.offsets.push([0.0, towards * LIFT / frame.scale, 0.0]);
+            out.triangles.push(point.triangle);
+            out.barycentrics.push(point.barycentric);
+            out.offsets.push([0.0, point.lift, 0.0]);
             out.local.rotations.push([1.0, 0.0, 0.0, 0.0]);
             out.local
                 .scales
-                .push([radius, style.thickness * radius, radius]);
+                .push([point.radius, style.thickness * point.radius, point.radius]);
             out.local.opacities.push(style.opacity);
             out.local.features.extend(rgb);
             out.local.features.push(confidence);
         }
+        out
     }
-    out
 }
 
 #[cfg(test)]

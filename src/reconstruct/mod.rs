@@ -74,8 +74,8 @@ pub struct Report {
     pub mirrored: usize,
     /// Texels of the back coloured from the front in front of them.
     pub behind: usize,
-    /// Texels of hands and teeth the photo does not show, coloured as what it shows of them or
-    /// from the face's skin.
+    /// Texels of hands, teeth and eyes the photo does not show, coloured as what it shows of
+    /// them or from the face's skin.
     pub unseen_parts: usize,
     /// Texels of the body below the photo's bottom edge, coloured as the edge shows the person there.
     pub past_edge: usize,
@@ -163,9 +163,10 @@ pub fn reconstruct_default(
         &fragments,
         &sampled,
     );
+    let unseen = unseen_parts::unseen_parts(body, uv, &sampled);
     let guesses: Vec<_> = behind::behind(body, uv, &sampled, crown)
         .into_iter()
-        .zip(unseen_parts::unseen_parts(body, uv, &sampled))
+        .zip(unseen.texels)
         .zip(past)
         .map(|((back, part), past)| {
             // An unseen hand is a hand on its back too, not the sleeve in front of it; below the
@@ -192,13 +193,11 @@ pub fn reconstruct_default(
         identity_of(body, &view.pose),
         source_name.into(),
     );
-    // The eyeballs finer than the UV map has them.
-    avatar.uv.append(eyes::fine_eyes(
-        body,
-        &posed.vertices,
-        &sampler,
-        &DiscStyle::default(),
-    ));
+    // The eyeballs finer than the UV map has them: as the photo shows them, else as guessed.
+    let fine_eyes = eyes::sample_eyes(body, &posed.vertices, &sampler, &DiscStyle::default());
+    avatar
+        .uv
+        .append(fine_eyes.discs(&unseen.eyes, &DiscStyle::default()));
     avatar.source_view = Some(view.clone());
     avatar.displacements = displacements;
 

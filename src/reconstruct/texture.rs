@@ -15,9 +15,21 @@ use crate::raster::{Fragments, RASTER_NEAR};
 /// counts as the visible surface: covers the depth change across one pixel on a surface inclined
 /// up to ~80° to the view (tan 80° ≈ 5.7), below which [`MIN_COSINE`] rejects it anyway.
 const DEPTH_TOLERANCE_PIXELS: f32 = 6.0;
-/// Parts inside the mouth: a few millimetres behind closed lips, within [`DEPTH_TOLERANCE_PIXELS`]
-/// of them, so the depth test alone gave the teeth the lips' colour as if they were seen.
-const INSIDE_MOUTH: [&str; 3] = ["teeth", "tongue", "mouth_cavity"];
+/// Parts behind the face's openings, each opening's a compartment of its own: a few millimetres
+/// behind closed lips or lids, within [`DEPTH_TOLERANCE_PIXELS`] of them, so the depth test
+/// alone gave the teeth the lips' colour, and the eyeballs the lids' and lashes', as if they
+/// were seen. The rest of the body is compartment 0.
+const COMPARTMENTS: [&[&str]; 2] = [
+    &["teeth", "tongue", "mouth_cavity"],
+    &[
+        "eye_front.L",
+        "eye_front.R",
+        "eye_back.L",
+        "eye_back.R",
+        "eye_cavity.L",
+        "eye_cavity.R",
+    ],
+];
 /// Surfaces seen more obliquely than this (cosine of the angle between normal and view ray) are
 /// too foreshortened to sample: one pixel smears over many texels.
 pub const MIN_COSINE: f32 = 0.2;
@@ -43,17 +55,22 @@ impl UvTexture {
     }
 }
 
-/// Per triangle of `body`: whether it lies inside the mouth ([`INSIDE_MOUTH`], all three
-/// corners). The depth tolerance joins a texel to the surface in front of it only on the same
-/// side of the lips.
-fn inside_mouth(body: &BodyModel) -> Vec<bool> {
+/// Per triangle of `body`: the compartment it lies in ([`COMPARTMENTS`], all three corners; 1
+/// the mouth's, 2 the eyes', 0 elsewhere). The depth tolerance joins a texel to the surface in
+/// front of it only within one compartment: on the same side of the lips or the lids.
+fn compartments(body: &BodyModel) -> Vec<u8> {
+    let of = |v: u32| {
+        let part = body.part_of(v as usize);
+        COMPARTMENTS
+            .iter()
+            .position(|parts| part.is_some_and(|p| parts.contains(&p)))
+            .map_or(0, |k| k as u8 + 1)
+    };
     body.triangles
         .iter()
         .map(|t| {
-            t.iter().all(|&v| {
-                body.part_of(v as usize)
-                    .is_some_and(|p| INSIDE_MOUTH.contains(&p))
-            })
+            let k = of(t[0]);
+            if t.iter().all(|&v| of(v) == k) { k } else { 0 }
         })
         .collect()
 }
@@ -79,7 +96,7 @@ pub(super) struct Sampler<'a> {
     camera: &'a Camera,
     source: &'a SourceImage,
     fragments: &'a Fragments,
-    inside: Vec<bool>,
+    compartment: Vec<u8>,
     /// The camera's centre.
     eye: Vec3,
 }
@@ -98,7 +115,7 @@ impl<'a> Sampler<'a> {
             camera,
             source,
             fragments,
-            inside: inside_mouth(body),
+            compartment: compartments(body),
             eye: camera
                 .view_from_world
                 .inverse()
@@ -145,7 +162,7 @@ impl<'a> Sampler<'a> {
             self.source,
             at,
             t as i32,
-            &self.inside,
+            &self.compartment,
             self.camera,
         )?;
         Some((rgb, cosine * mask))
@@ -163,15 +180,15 @@ impl<'a> Sampler<'a> {
 }
 
 /// The photo's colour (un-premultiplied) and mask at `at`'s `(x, y)` from the bilinear taps that
-/// show the texel's own surface (its triangle, or one on the same side of the lips, `inside`,
-/// within the depth tolerance of depth `at.z`). `None` if any tap shows a surface in front of it
+/// show the texel's own surface (its triangle, or one in the same `compartment`, within the
+/// depth tolerance of depth `at.z`). `None` if any tap shows a surface in front of it
 /// (hidden), or if too little of the taps is its surface or the person.
 fn sample_surface(
     f: &Fragments,
     source: &SourceImage,
     at: Vec3,
     triangle: i32,
-    inside: &[bool],
+    compartment: &[u8],
     camera: &Camera,
 ) -> Option<([f32; 3], f32)> {
     let (x, y, z) = (at.x, at.y, at.z);
@@ -191,7 +208,7 @@ fn sample_surface(
         }
         let k = f.index(px as u32, py as u32);
         let front = f.triangle[k];
-        let same_side = front >= 0 && inside[front as usize] == inside[triangle as usize];
+        let same_side = front >= 0 && compartment[front as usize] == compartment[triangle as usize];
         let near = if same_side { tolerance } else { 0.0 };
         let own = front == triangle || (same_side && (f.depth[k] - z).abs() <= tolerance);
         if !own {

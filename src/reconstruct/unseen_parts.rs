@@ -1,4 +1,5 @@
-//! Colours for the parts of the hands and the teeth the photo does not show (default mode).
+//! Colours for the parts of the hands, the teeth and the eyes the photo does not show (default
+//! mode).
 //! An upper-body photo often cuts the hands off at its bottom edge, or a held object or the
 //! other arm hides them, and a closed mouth hides the teeth; left to the inpainting, such a part
 //! took the colours nearest it in the UV layout (a sleeve's blue patches on a synthetic subject's
@@ -7,7 +8,9 @@
 //! what it shows, and one it shows nothing of a guess from the face's skin: the person's own skin
 //! for a hand, and for teeth that skin with most of its tint taken out and brightened (teeth are
 //! near-white under the same light). A part it shows well is left to the inpainting, which
-//! spreads its own colours (a glove stays a glove).
+//! spreads its own colours (a glove stays a glove). What the photo does not show of an eyeball
+//! is an eye looking straight ahead, whatever it shows of the rest: the sclera as teeth are,
+//! the iris and the pupil darker skin.
 
 use glam::Vec3;
 
@@ -84,18 +87,91 @@ impl Skin {
     }
 }
 
+/// Each eyeball's front and back parts. What the photo does not show of an eyeball (all of it
+/// behind shut lids, its top and bottom behind open ones) is guessed as an eye: left to the
+/// inpainting, an avatar opening its eyes wider than the photo did showed a blank ball of the
+/// lids' skin.
+const EYES: [(&str, &str); 2] = [("eye_front.L", "eye_back.L"), ("eye_front.R", "eye_back.R")];
+/// An eye looking straight ahead: the iris within this cosine of the eyeball's forward axis (a
+/// 12 mm iris on the default body's eyeball, 15 mm in radius: 24°), the pupil within the second
+/// (a 4 mm pupil: 8°).
+const IRIS_COSINE: f32 = 0.915;
+const PUPIL_COSINE: f32 = 0.99;
+/// The iris and pupil from the face's skin (its light kept): an iris as dark against skin as a
+/// brown one (the commonest), a pupil near black.
+const IRIS_SHADE: f32 = 0.4;
+const PUPIL_SHADE: f32 = 0.1;
+
+/// An eye the photo does not show, guessed looking straight ahead: the sclera as teeth are
+/// ([`Skin::teeth`]), the iris and pupil darker skin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EyeGuess {
+    /// The eyeball's front part.
+    pub part: &'static str,
+    /// The eyeball's centre at rest (the mean of its front and back parts' vertices); its
+    /// forward axis is +z.
+    centre: Vec3,
+    sclera: [f32; 3],
+    iris: [f32; 3],
+    pupil: [f32; 3],
+}
+
+impl EyeGuess {
+    /// The colour at `p` on the eyeball (rest pose).
+    pub fn at(&self, p: Vec3) -> [f32; 3] {
+        match (p - self.centre).normalize_or_zero().z {
+            a if a >= PUPIL_COSINE => self.pupil,
+            a if a >= IRIS_COSINE => self.iris,
+            _ => self.sclera,
+        }
+    }
+}
+
+/// Each eye of `body` as guessed from the face's `skin`, for what the photo does not show of it.
+fn guessed_eyes(body: &BodyModel, skin: &Skin) -> Vec<EyeGuess> {
+    let shade = |k: f32| skin.colour.map(|c| k * c);
+    EYES.iter()
+        .filter_map(|&(front, back)| {
+            let ball: Vec<Vec3> = (0..body.vertices.len())
+                .filter(|&v| body.part_of(v).is_some_and(|p| p == front || p == back))
+                .map(|v| body.vertices[v])
+                .collect();
+            (!ball.is_empty()).then(|| EyeGuess {
+                part: front,
+                centre: ball.iter().sum::<Vec3>() / ball.len() as f32,
+                sclera: skin.teeth(),
+                iris: shade(IRIS_SHADE),
+                pupil: shade(PUPIL_SHADE),
+            })
+        })
+        .collect()
+}
+
 /// Whether a head point at `p` (rest pose) is the face, the head joint resting at `head`.
 pub fn on_face(head: Vec3, p: Vec3) -> bool {
     p.z - head.z > FACE_FRONT && p.y - head.y < FACE_BELOW
 }
 
+/// The colours guessed for what the photo does not show of the hands, the teeth and the eyes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct UnseenParts {
+    /// Per texel: the guess, `None` where there is none.
+    pub texels: Vec<Option<[f32; 3]>>,
+    /// The eyes guessed, for the eyeballs' fine discs ([`super::eyes`]).
+    pub eyes: Vec<EyeGuess>,
+}
+
 /// Per texel of `uv`: for the unseen texels (neither they nor their mirror images seen) of a part
 /// of [`PARTS`] the photo shows less than [`SEEN_SHARE`] of, the median of what it shows of that
-/// part, or its guess from the face's skin where it shows none; `None` elsewhere, and everywhere
-/// when the photo shows no face.
-pub fn unseen_parts(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Vec<Option<[f32; 3]>> {
+/// part, or its guess from the face's skin where it shows none, and for the eyeballs' fronts an
+/// eye looking straight ahead ([`EyeGuess`]); `None` elsewhere, and everywhere when the photo
+/// shows no face.
+pub fn unseen_parts(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> UnseenParts {
     let n = (uv.size * uv.size) as usize;
-    let mut out = vec![None; n];
+    let mut out = UnseenParts {
+        texels: vec![None; n],
+        eyes: Vec::new(),
+    };
     let seen = |i: usize| texture.confidence[i] > 0.0;
     let part = |i: usize| body.part_of(uv.nearest_vertex(i, &body.triangles));
     let head = body.joint_index("head").map(|j| body.joints[j].rest);
@@ -112,6 +188,16 @@ pub fn unseen_parts(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Vec<Op
             .collect(),
     );
     let Some(skin) = skin else { return out };
+    let mirrored = |i: usize| uv.mirror[i] >= 0 && seen(uv.mirror[i] as usize);
+    let eyes = guessed_eyes(body, &skin);
+    for eye in &eyes {
+        for i in uv.texels.iter().map(|&t| t as usize) {
+            if part(i) == Some(eye.part) && !seen(i) && !mirrored(i) {
+                out.texels[i] = Some(eye.at(uv.point(i, &body.vertices, &body.triangles)));
+            }
+        }
+    }
+    out.eyes = eyes;
     for (name, guess) in PARTS {
         let texels: Vec<usize> = uv
             .texels
@@ -119,7 +205,6 @@ pub fn unseen_parts(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Vec<Op
             .map(|&t| t as usize)
             .filter(|&i| part(i) == Some(name))
             .collect();
-        let mirrored = |i: usize| uv.mirror[i] >= 0 && seen(uv.mirror[i] as usize);
         let shown = texels.iter().filter(|&&i| seen(i) || mirrored(i)).count();
         if (shown as f32) >= SEEN_SHARE * texels.len() as f32 {
             continue;
@@ -137,7 +222,7 @@ pub fn unseen_parts(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Vec<Op
         let colour = own.unwrap_or_else(|| guess(&skin));
         for i in texels {
             if !seen(i) && !mirrored(i) {
-                out[i] = Some(colour);
+                out.texels[i] = Some(colour);
             }
         }
     }
@@ -187,7 +272,7 @@ mod tests {
                 ),
                 _ => None,
             };
-            assert_eq!(guessed[i], expected, "texel {i}: {:?}", part(i));
+            assert_eq!(guessed.texels[i], expected, "texel {i}: {:?}", part(i));
         }
         // A fifth of the left hand seen in a glove: its mirror, the right hand, shows the glove
         // too, and neither takes skin.
@@ -203,8 +288,46 @@ mod tests {
         let guessed = unseen_parts(&body, &uv, &texture);
         for &i in &texels {
             if matches!(part(i), Some("hand.L" | "hand.R")) {
-                assert_ne!(guessed[i], Some(skin), "texel {i}");
+                assert_ne!(guessed.texels[i], Some(skin), "texel {i}");
             }
+        }
+    }
+
+    /// Eyes are guessed looking straight ahead: each eyeball's centre is its eye joint's place
+    /// (within 3 mm), the point straight ahead of it the pupil, 15° off the iris, 45° off the
+    /// sclera; the sclera brighter than the lit skin, the iris darker than the skin and the pupil
+    /// darker again.
+    #[test]
+    fn unseen_eyes_are_guessed_looking_straight_ahead() {
+        let body = BodyModel::default_body().expect("body");
+        let skin = Skin {
+            colour: [0.8, 0.6, 0.5],
+            lit: 0.7,
+        };
+        let eyes = guessed_eyes(&body, &skin);
+        assert_eq!(eyes.len(), 2);
+        for eye in &eyes {
+            let joint = if eye.part.ends_with(".L") {
+                "eye.L"
+            } else {
+                "eye.R"
+            };
+            let joint = body.joints[body.joint_index(joint).expect(joint)].rest;
+            assert!(
+                eye.centre.distance(joint) < 0.003,
+                "{eye:?} against {joint}"
+            );
+            let at = |degrees: f32| {
+                let (sin, cos) = degrees.to_radians().sin_cos();
+                eye.at(eye.centre + 0.015 * Vec3::new(sin, 0.0, cos))
+            };
+            assert_eq!(at(0.0), eye.pupil);
+            assert_eq!(at(15.0), eye.iris);
+            assert_eq!(at(45.0), eye.sclera);
+            let level = |c: [f32; 3]| brightness(c);
+            assert!(level(eye.sclera) > skin.lit, "{eye:?}");
+            assert!(level(eye.iris) < level(skin.colour), "{eye:?}");
+            assert!(level(eye.pupil) < level(eye.iris), "{eye:?}");
         }
     }
 
