@@ -40,36 +40,17 @@ fn lattice(n: usize) -> Vec<[f32; 3]> {
     out
 }
 
-/// One point of an eyeball's fine lattice: where it lies, the disc it would be, and what the
-/// photo shows there.
-struct FinePoint {
-    triangle: u32,
-    barycentric: [f32; 3],
-    /// The point on the body at rest (where a guessed eye is coloured).
-    rest: Vec3,
-    /// The eyeball's front part.
-    part: &'static str,
-    radius: f32,
-    /// The lift along the triangle's normal, towards the camera, in the triangle's frame.
-    lift: f32,
-    /// The photo's colour and confidence, `None` where it does not show the point.
-    seen: Option<([f32; 3], f32)>,
-}
-
-/// The eyeballs' fronts on a lattice about a photo pixel apart, each point sampled from the
-/// photo ([`sample_eyes`]).
-pub(super) struct FineEyes {
-    points: Vec<FinePoint>,
-}
-
-/// Samples the eyeballs' fronts of `body` posed at `vertices` on their fine lattice where
-/// `sampler` (the photo seen from its camera) shows them; the discs' radius from `style`.
-pub(super) fn sample_eyes(
+/// The fine discs of the eyeballs' fronts on `body` posed at `vertices`: where `sampler` (the
+/// photo seen from its camera) shows a lattice point, of its colour; where it does not, of its
+/// eye's guess among `guessed` (source confidence 0); with the default reconstruction's features
+/// (RGB, then the source confidence).
+pub(super) fn fine_eyes(
     body: &BodyModel,
     vertices: &[Vec3],
     sampler: &Sampler,
+    guessed: &[EyeGuess],
     style: &DiscStyle,
-) -> FineEyes {
+) -> UvGaussians {
     let (ids, tris): (Vec<usize>, Vec<[u32; 3]>) = body
         .triangles
         .iter()
@@ -84,12 +65,8 @@ pub(super) fn sample_eyes(
     let mut frames = Vec::new();
     triangle_frames(vertices, &tris, &mut frames);
     let lattices: Vec<Vec<[f32; 3]>> = (0..=MAX_SUBDIVISIONS).map(lattice).collect();
-    let mut points = Vec::new();
+    let mut out = UvGaussians::default();
     for ((&t, tri), frame) in ids.iter().zip(&tris).zip(&frames) {
-        let part = body
-            .part_of(tri[0] as usize)
-            .and_then(|p| FINE_PARTS.iter().find(|&&f| f == p));
-        let Some(&part) = part else { continue };
         if frame.scale <= 0.0 {
             continue;
         }
@@ -104,50 +81,32 @@ pub(super) fn sample_eyes(
         let metres = longest(&|k| corners[k].distance(corners[(k + 1) % 3]));
         let radius = style.radius * metres / n as f32 / frame.scale;
         let normal = frame.rotation.y_axis;
+        let part = body.part_of(tri[0] as usize);
+        let eye = guessed.iter().find(|g| Some(g.part) == part);
         for &b in &lattices[n] {
             let p: Vec3 = (0..3).map(|k| b[k] * corners[k]).sum();
-            let towards = normal.dot(sampler.eye() - p).signum();
-            points.push(FinePoint {
-                triangle: t as u32,
-                barycentric: b,
-                rest: (0..3).map(|k| b[k] * body.vertices[tri[k] as usize]).sum(),
-                part,
-                radius,
-                lift: towards * LIFT / frame.scale,
-                seen: sampler.sample(t as u32, p),
-            });
-        }
-    }
-    FineEyes { points }
-}
-
-impl FineEyes {
-    /// The fine discs: where the photo shows the point, of its colour; where it does not, of its
-    /// eye's guess among `guessed` (source confidence 0); with the default reconstruction's
-    /// features (RGB, then the source confidence).
-    pub(super) fn discs(&self, guessed: &[EyeGuess], style: &DiscStyle) -> UvGaussians {
-        let mut out = UvGaussians::default();
-        for point in &self.points {
+            // Where the photo does not show the point, the guess at its place at rest.
             let guess = || {
-                let eye = guessed.iter().find(|g| g.part == point.part)?;
-                Some((eye.at(point.rest), 0.0))
+                let rest = (0..3).map(|k| b[k] * body.vertices[tri[k] as usize]).sum();
+                Some((eye?.at(rest), 0.0))
             };
-            let Some((rgb, confidence)) = point.seen.or_else(guess) else {
+            let Some((rgb, confidence)) = sampler.sample(t as u32, p).or_else(guess) else {
                 continue;
             };
-            out.triangles.push(point.triangle);
-            out.barycentrics.push(point.barycentric);
-            out.offsets.push([0.0, point.lift, 0.0]);
+            let towards = normal.dot(sampler.eye() - p).signum();
+            out.triangles.push(t as u32);
+            out.barycentrics.push(b);
+            out.offsets.push([0.0, towards * LIFT / frame.scale, 0.0]);
             out.local.rotations.push([1.0, 0.0, 0.0, 0.0]);
             out.local
                 .scales
-                .push([point.radius, style.thickness * point.radius, point.radius]);
+                .push([radius, style.thickness * radius, radius]);
             out.local.opacities.push(style.opacity);
             out.local.features.extend(rgb);
             out.local.features.push(confidence);
         }
-        out
     }
+    out
 }
 
 #[cfg(test)]

@@ -194,10 +194,13 @@ pub fn reconstruct_default(
         source_name.into(),
     );
     // The eyeballs finer than the UV map has them: as the photo shows them, else as guessed.
-    let fine_eyes = eyes::sample_eyes(body, &posed.vertices, &sampler, &DiscStyle::default());
-    avatar
-        .uv
-        .append(fine_eyes.discs(&unseen.eyes, &DiscStyle::default()));
+    avatar.uv.append(eyes::fine_eyes(
+        body,
+        &posed.vertices,
+        &sampler,
+        &unseen.eyes,
+        &DiscStyle::default(),
+    ));
     avatar.source_view = Some(view.clone());
     avatar.displacements = displacements;
 
