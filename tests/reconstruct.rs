@@ -1158,8 +1158,8 @@ fn a_held_object_moves_as_one_piece() {
 /// reaching 20 px past the body's outline, both sides, from the chest down while that stays in
 /// the picture) with a red badge on the coat beyond the body. Seen from behind, a flat disc of
 /// the photo's colour looked the same as from the front, so the badge showed through as a
-/// cut-out: BEFORE of the badge's 144 pixels' places from behind drawn red before
-/// `extras::cloth_back`, AFTER after (bound 5). The source view keeps the badge.
+/// cut-out: 114 of the badge's 144 pixels' places from behind drawn red before
+/// `extras::cloth_back`, 5 after (bound 10). The source view keeps the badge (119 red).
 #[test]
 fn cloth_beyond_the_body_shows_its_back_from_behind() {
     let body = body();

@@ -189,15 +189,16 @@ pub fn unseen_parts(body: &BodyModel, uv: &UvMap, texture: &UvTexture) -> Unseen
     );
     let Some(skin) = skin else { return out };
     let mirrored = |i: usize| uv.mirror[i] >= 0 && seen(uv.mirror[i] as usize);
-    let eyes = guessed_eyes(body, &skin);
-    for eye in &eyes {
-        for i in uv.texels.iter().map(|&t| t as usize) {
-            if part(i) == Some(eye.part) && !seen(i) && !mirrored(i) {
-                out.texels[i] = Some(eye.at(uv.point(i, &body.vertices, &body.triangles)));
-            }
+    out.eyes = guessed_eyes(body, &skin);
+    for i in uv.texels.iter().map(|&t| t as usize) {
+        let of = part(i);
+        let Some(eye) = out.eyes.iter().find(|e| of == Some(e.part)) else {
+            continue;
+        };
+        if !seen(i) && !mirrored(i) {
+            out.texels[i] = Some(eye.at(uv.point(i, &body.vertices, &body.triangles)));
         }
     }
-    out.eyes = eyes;
     for (name, guess) in PARTS {
         let texels: Vec<usize> = uv
             .texels
