@@ -90,11 +90,35 @@ fn envelope(f: &[f32], label: &[u32], d: &mut [f32], idx: &mut [u32]) {
 /// The connected parts (4-neighbours) of the pixels where `inside` is set, as a label per pixel
 /// (`u32::MAX` outside) and each part's pixel count.
 pub fn connected_parts(inside: &[bool], size: usize) -> (Vec<u32>, Vec<usize>) {
-    let mut label = vec![u32::MAX; size * size];
+    connected_regions(size, size, |i| inside[i], |_, _| true)
+}
+
+/// The 4-neighbours of cell `i` of a `width × height` grid (row-major): left, right, up, down,
+/// `None` past the grid's edge.
+pub fn neighbours(i: usize, width: usize, height: usize) -> [Option<usize>; 4] {
+    let (x, y) = (i % width, i / width);
+    [
+        (x > 0).then(|| i - 1),
+        (x + 1 < width).then(|| i + 1),
+        (y > 0).then(|| i - width),
+        (y + 1 < height).then(|| i + width),
+    ]
+}
+
+/// The connected parts of a `width × height` grid (row-major): cells where `inside` holds, two
+/// 4-neighbours in one part where `joined` links them. A label per cell (`u32::MAX` outside) and
+/// each part's cell count.
+pub fn connected_regions(
+    width: usize,
+    height: usize,
+    inside: impl Fn(usize) -> bool,
+    joined: impl Fn(usize, usize) -> bool,
+) -> (Vec<u32>, Vec<usize>) {
+    let mut label = vec![u32::MAX; width * height];
     let mut sizes = Vec::new();
     let mut stack = Vec::new();
-    for start in 0..size * size {
-        if !inside[start] || label[start] != u32::MAX {
+    for start in 0..width * height {
+        if !inside(start) || label[start] != u32::MAX {
             continue;
         }
         let part = sizes.len() as u32;
@@ -103,15 +127,8 @@ pub fn connected_parts(inside: &[bool], size: usize) -> (Vec<u32>, Vec<usize>) {
         stack.push(start);
         while let Some(i) = stack.pop() {
             count += 1;
-            let (x, y) = (i % size, i / size);
-            let neighbours = [
-                (x > 0).then(|| i - 1),
-                (x + 1 < size).then(|| i + 1),
-                (y > 0).then(|| i - size),
-                (y + 1 < size).then(|| i + size),
-            ];
-            for j in neighbours.into_iter().flatten() {
-                if inside[j] && label[j] == u32::MAX {
+            for j in neighbours(i, width, height).into_iter().flatten() {
+                if inside(j) && label[j] == u32::MAX && joined(i, j) {
                     label[j] = part;
                     stack.push(j);
                 }
