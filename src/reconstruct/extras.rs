@@ -256,7 +256,7 @@ pub fn extras(
         push(&mut out, point, skinning, disc, &gaussian, vertices, posed);
     }
     cloth_back(
-        &mut out, &cloth, &covered, &nearest, &anchors, camera, posed,
+        &mut out, photo, &cloth, &covered, &nearest, &anchors, camera, posed,
     );
     if hair > 0.0 {
         hang_behind(&mut out, &strands, &anchors, camera, fragments, hair, posed);
@@ -278,10 +278,15 @@ const BACK_CELL: usize = 8;
 /// same from behind, so seen from the back the cloth beside the body showed the front's print (a
 /// badge, a name tag) as a cut-out. Behind each [`BACK_STRIDE`]² block of the `cloth` pixels (with
 /// their colours; `nearest` gives each pixel's nearest body pixel) a disc stands at the body's far
-/// side there, in the median colour of the cloth around it (the cloth's colour comes through, a
-/// badge does not, as the body's back takes it: [`super::behind`]), skinned by the body near it.
+/// side there, in the median colour of the cloth around it less the prints on it (found on the
+/// whole person in `photo`, [`super::behind::prints`]: the cloth's colour comes through, a badge
+/// does not, as the body's back takes it), skinned by the body near it. (The median alone, where
+/// half of the cloth beside the demo portrait's body was her badge, put a purple smear on her
+/// back.)
+#[allow(clippy::too_many_arguments)]
 fn cloth_back(
     out: &mut SkinnedGaussians,
+    photo: &SourceImage,
     cloth: &[(usize, [f32; 3])],
     covered: &[bool],
     nearest: &[Option<(f32, u32)>],
@@ -301,6 +306,7 @@ fn cloth_back(
     for &(i, c) in cloth {
         colour[i] = Some(c);
     }
+    let print = prints_on(photo, cloth, nearest, &far, camera);
     for &(i, _) in cloth {
         let (x, y) = (i % size, i / size);
         if x % BACK_STRIDE != 0 || y % BACK_STRIDE != 0 {
@@ -340,10 +346,11 @@ fn cloth_back(
             let mut around = Vec::new();
             for wy in (cy.saturating_sub(radius)..(cy + radius + 1).min(size)).step_by(step) {
                 for wx in (cx.saturating_sub(radius)..(cx + radius + 1).min(size)).step_by(step) {
-                    around.extend(colour[wy * size + wx]);
+                    let k = wy * size + wx;
+                    around.extend(colour[k].map(|c| (c, print[k])));
                 }
             }
-            super::behind::median(around)
+            super::behind::cloth_median(around)
         });
         let Some(rgb) = rgb.or(colour[i]) else {
             continue;
@@ -357,6 +364,38 @@ fn cloth_back(
         };
         push(out, point, skinning, disc, &extra, anchors.vertices, posed);
     }
+}
+
+/// Per pixel of `photo`: whether it lies in a print on the person's clothes
+/// ([`super::behind::prints`], over the person's pixels), the print's largest area in pixels at
+/// the median depth of the far side behind the `cloth` pixels (`far`, by their `nearest` body
+/// pixels).
+fn prints_on(
+    photo: &SourceImage,
+    cloth: &[(usize, [f32; 3])],
+    nearest: &[Option<(f32, u32)>],
+    far: &[f32],
+    camera: &Camera,
+) -> Vec<bool> {
+    let size = camera.width as usize;
+    let mut depths: Vec<f32> = cloth
+        .iter()
+        .filter_map(|&(i, _)| Some(far[nearest[i]?.1 as usize]))
+        .filter(|z| z.is_finite())
+        .collect();
+    if depths.is_empty() {
+        return vec![false; size * size];
+    }
+    let mid = depths.len() / 2;
+    let z = *depths.select_nth_unstable_by(mid, f32::total_cmp).1;
+    let area = super::behind::PRINT_AREA / camera.pixel_footprint(z).powi(2);
+    let person: Vec<Option<[f32; 3]>> = (0..size * size)
+        .map(|i| {
+            let (rgb, m) = photo.pixel(i);
+            (m >= PERSON).then(|| rgb.map(|c| (c / m).min(1.0)))
+        })
+        .collect();
+    super::behind::prints(&person, size, size, area as usize)
 }
 
 /// A disc facing `camera`: across the view (camera x and y), thin along it (axis 1 is the thin
