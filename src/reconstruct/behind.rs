@@ -6,11 +6,10 @@
 //! comes through) that leaves out the prints on the cloth ([`prints`]: a badge wider than half
 //! the window came through the median alone, as the demo portrait's purple badge on her back);
 //! where the front shows nothing there (below the photo's edge), the nearest it shows, in
-//! windows up to 30 cm wide. The back of the head
-//! takes the crown's colour (hair, or a bald scalp), not the face's. (Unseen texels facing the
-//! front or the sides are left to the mirror and the inpainting: taking the front's median
-//! there too cost 0.4–0.8 dB at ±30–90° on the synthetic jacket, whose sides the inpainting
-//! continues better.)
+//! windows up to 30 cm wide. The back of the head takes the crown's colour (hair, or a bald
+//! scalp), not the face's. (Unseen texels facing the front or the sides are left to the mirror
+//! and the inpainting: taking the front's median there too cost 0.4–0.8 dB at ±30–90° on the
+//! synthetic jacket, whose sides the inpainting continues better.)
 
 use glam::Vec3;
 
@@ -224,12 +223,11 @@ pub(super) fn prints(
     height: usize,
     min: usize,
 ) -> Vec<bool> {
-    let colour = |i: usize| colours[i];
     let (patch, sizes) = connected_regions(
         width,
         height,
         |i| colours[i].is_some(),
-        |i, j| match (colour(i), colour(j)) {
+        |i, j| match (colours[i], colours[j]) {
             (Some(a), Some(b)) => (0..3).all(|k| (a[k] - b[k]).abs() < PRINT_EDGE),
             _ => false,
         },
