@@ -256,6 +256,12 @@ impl SourceImage {
         let rgb = [self.rgb[3 * i], self.rgb[3 * i + 1], self.rgb[3 * i + 2]];
         (rgb, self.mask.as_ref().map_or(1.0, |m| m[i]))
     }
+
+    /// Pixel `i`'s colour with the mask it is premultiplied by divided back out (at most 1).
+    pub fn straight(&self, i: usize) -> [f32; 3] {
+        let (rgb, m) = self.pixel(i);
+        rgb.map(|c| (c / m).min(1.0))
+    }
 }
 
 /// Bilinear interpolation on a `size`² grid at centre-at-integer `(x, y)`, clamped to the edge;

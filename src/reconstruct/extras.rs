@@ -195,8 +195,7 @@ pub fn extras(
     for u in found {
         let (i, z) = (u.pixel, u.depth);
         let m = mask[i];
-        let (rgb, _) = photo.pixel(i);
-        let features = rgb.map(|c| (c / m).min(1.0));
+        let features = photo.straight(i);
         let (point, skinning, along, z) = if is_hair(&u) {
             let (depth, joints) = smoothed.next().expect("one per hair pixel");
             let point = unproject(i, depth);
@@ -255,11 +254,20 @@ pub fn extras(
         };
         push(&mut out, point, skinning, disc, &gaussian, vertices, posed);
     }
+    // The body's far side from the camera, rasterized once for the cloth's back and the hair
+    // behind the neck, and only when either asks.
+    let far = std::cell::OnceCell::new();
+    let far_side = || {
+        far.get_or_init(|| crate::raster::farthest(vertices, &body.triangles, camera))
+            .as_slice()
+    };
     cloth_back(
-        &mut out, photo, &cloth, &covered, &nearest, &anchors, camera, posed,
+        &mut out, photo, &cloth, &covered, &nearest, &anchors, camera, posed, far_side,
     );
     if hair > 0.0 {
-        hang_behind(&mut out, &strands, &anchors, camera, fragments, hair, posed);
+        hang_behind(
+            &mut out, &strands, &anchors, camera, fragments, hair, posed, far_side,
+        );
     }
     out
 }
@@ -284,7 +292,7 @@ const BACK_CELL: usize = 8;
 /// half of the cloth beside the demo portrait's body was her badge, put a purple smear on her
 /// back.)
 #[allow(clippy::too_many_arguments)]
-fn cloth_back(
+fn cloth_back<'a>(
     out: &mut SkinnedGaussians,
     photo: &SourceImage,
     cloth: &[(usize, [f32; 3])],
@@ -293,20 +301,21 @@ fn cloth_back(
     anchors: &Anchors,
     camera: &Camera,
     posed: &PosedBody,
+    far_side: impl FnOnce() -> &'a [f32],
 ) {
     if cloth.is_empty() {
         return;
     }
     let size = camera.width as usize;
     let disc = facing_camera(camera);
-    let far = crate::raster::farthest(anchors.vertices, &anchors.body.triangles, camera);
+    let far = far_side();
     let cells = size.div_ceil(BACK_CELL);
     let mut medians: Vec<Option<Option<[f32; 3]>>> = vec![None; cells * cells];
     let mut colour: Vec<Option<[f32; 3]>> = vec![None; size * size];
     for &(i, c) in cloth {
         colour[i] = Some(c);
     }
-    let print = prints_on(photo, cloth, nearest, &far, camera);
+    let print = prints_on(photo, cloth, nearest, far, camera);
     for &(i, _) in cloth {
         let (x, y) = (i % size, i / size);
         if x % BACK_STRIDE != 0 || y % BACK_STRIDE != 0 {
@@ -390,10 +399,7 @@ fn prints_on(
     let z = *depths.select_nth_unstable_by(mid, f32::total_cmp).1;
     let area = super::behind::PRINT_AREA / camera.pixel_footprint(z).powi(2);
     let person: Vec<Option<[f32; 3]>> = (0..size * size)
-        .map(|i| {
-            let (rgb, m) = photo.pixel(i);
-            (m >= PERSON).then(|| rgb.map(|c| (c / m).min(1.0)))
-        })
+        .map(|i| (photo.pixel(i).1 >= PERSON).then(|| photo.straight(i)))
         .collect();
     super::behind::prints(&person, size, size, area as usize)
 }
@@ -415,7 +421,7 @@ const CURTAIN_SPACING: f32 = 0.004;
 /// it, each disc skinned as hair there is and kept only where the photo's camera sees the body
 /// (`fragments`) or those strands in front of it, so the photo's view keeps what it shows.
 #[allow(clippy::too_many_arguments)]
-fn hang_behind(
+fn hang_behind<'a>(
     out: &mut SkinnedGaussians,
     strands: &[Strand],
     anchors: &Anchors,
@@ -423,6 +429,7 @@ fn hang_behind(
     fragments: &Fragments,
     hair: f32,
     posed: &PosedBody,
+    far_side: impl FnOnce() -> &'a [f32],
 ) {
     let Some(head) = anchors.body.joint_index("head") else {
         return;
@@ -437,7 +444,7 @@ fn hang_behind(
         camera,
         below_skull.y.max(0.0) as usize,
         camera.project(joint).x,
-        || crate::raster::farthest(anchors.vertices, &anchors.body.triangles, camera),
+        far_side,
         hair,
         CURTAIN_SPACING,
     );

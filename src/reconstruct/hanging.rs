@@ -39,13 +39,13 @@ pub(super) struct Disc {
 /// for only where hair hangs) in it at that row or above, as hair hangs straight down from the
 /// back of the skull and then lies on the back; its discs `spacing` apart along the row.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn curtain<'a>(
+pub(super) fn curtain<'a, 'b>(
     hair: &'a [Strand],
     size: usize,
     camera: &Camera,
     first_row: usize,
     middle: f32,
-    backs: impl FnOnce() -> Vec<f32>,
+    backs: impl FnOnce() -> &'b [f32],
     thickness: f32,
     spacing: f32,
 ) -> Vec<Disc> {

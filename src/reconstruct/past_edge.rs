@@ -100,10 +100,8 @@ pub fn past_edge(
                         let k = (y * side + x) as usize;
                         let on_head_or_hand = usize::try_from(fragments.triangle[k])
                             .is_ok_and(|t| excluded[body.triangles[t][0] as usize]);
-                        let (rgb, m) = photo.pixel(k);
-                        if m >= PERSON && !on_head_or_hand {
-                            // The photo is premultiplied by its mask.
-                            colours.push(rgb.map(|c| (c / m).min(1.0)));
+                        if photo.pixel(k).1 >= PERSON && !on_head_or_hand {
+                            colours.push(photo.straight(k));
                         }
                     }
                 }
